@@ -26,7 +26,9 @@ err = Console(stderr=True)
 
 
 @app.command()
-def validate(test: Annotated[Path, typer.Argument(help="UavTest YAML, Aerialist or competition test YAML")]) -> None:
+def validate(
+    test: Annotated[Path, typer.Argument(help="UavTest YAML, Aerialist or competition test YAML")],
+) -> None:
     """Check a test file; exit 2 with the file, field, value and what is allowed when it is wrong."""
     from uavtest.spec.cli_support import validate_command
 

@@ -187,8 +187,11 @@ class Mission(Model):
 
     @model_validator(mode="after")
     def _one_source(self) -> Mission:
-        sources = [n for n, v in (("plan", self.plan), ("planFile", self.plan_file),
-                                  ("waypoints", self.waypoints)) if v is not None]
+        sources = [
+            n
+            for n, v in (("plan", self.plan), ("planFile", self.plan_file), ("waypoints", self.waypoints))
+            if v is not None
+        ]
         if len(sources) > 1:
             raise ValueError(f"give only one of plan, planFile, waypoints (got {', '.join(sources)})")
         if not sources:
