@@ -1,0 +1,3 @@
+module uavtest-pause
+
+go 1.26.0

@@ -1,0 +1,58 @@
+# shellcheck shell=bash
+# Shared settings of the e2e cluster scripts: sourced, never run.
+# Everything the harness builds or downloads lives under $UAVTEST_CACHE (default ~/.cache/uavtest).
+
+HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+CACHE=${UAVTEST_CACHE:-$HOME/.cache/uavtest}
+BIN=$CACHE/bin          # built binaries (kube-*, kubectl, etcd, kwok, minio, pause)
+SHARE=$CACHE/share      # kwok stages, images (OCI archives)
+DEBX=$CACHE/deb/x       # Debian packages unpacked with dpkg-deb -x (containerd, runc, CNI, debootstrap)
+
+# --- pinned versions (bump here; the version stamps then force a rebuild)
+K8S_VERSION=v1.36.3
+ETCD_VERSION=v3.6.16
+KWOK_VERSION=v0.8.0
+# github.com/minio/minio has no semver tags: a pseudo-version of master (2026-02-12), builds with Go 1.26
+MINIO_VERSION=v0.0.0-20260212201848-7aac2a2c5b7c
+DEB_PACKAGES="containerd runc containernetworking-plugins"
+
+# Go: caches under the cache dir so a warm machine rebuilds nothing and downloads nothing
+if ! command -v go >/dev/null 2>&1; then export PATH=/usr/local/go/bin:$PATH; fi
+export GOPATH=$CACHE/go/path GOMODCACHE=$CACHE/go/mod GOCACHE=$CACHE/go/build
+export GOFLAGS=-buildvcs=false CGO_ENABLED=${CGO_ENABLED:-0}
+
+log() { echo "[uavtest-cluster] $*" >&2; }
+now() { date +%s.%N; }
+since() { awk -v a="$1" -v b="$(now)" 'BEGIN { printf "%.1f", b - a }'; }
+
+# wait_for SECONDS CMD... : poll CMD every 0.2 s until it succeeds; non-zero if it never did
+wait_for() {
+  local n=$(( $1 * 5 )); shift
+  for (( i = 0; i < n; i++ )); do "$@" >/dev/null 2>&1 && return 0; sleep 0.2; done
+  return 1
+}
+
+# stop_pidfile FILE : TERM the process named in FILE, wait up to 10 s, then KILL; remove FILE
+stop_pidfile() {
+  local f=$1 p
+  [ -f "$f" ] || return 0
+  p=$(cat "$f")
+  if [ -n "$p" ] && kill -0 "$p" 2>/dev/null; then
+    kill "$p" 2>/dev/null || true
+    for (( i = 0; i < 50; i++ )); do kill -0 "$p" 2>/dev/null || break; sleep 0.2; done
+    kill -0 "$p" 2>/dev/null && kill -9 "$p" 2>/dev/null
+    for (( i = 0; i < 25; i++ )); do kill -0 "$p" 2>/dev/null || break; sleep 0.2; done
+  fi
+  rm -f "$f"
+}
+
+# port NAME DEFAULT : a port from the cluster dir's ports.env (written by up.sh), else env, else default
+load_ports() {
+  local d=$1
+  # shellcheck disable=SC1091
+  [ -f "$d/ports.env" ] && . "$d/ports.env"
+  ETCD_PORT=${ETCD_PORT:-2379}; ETCD_PEER_PORT=${ETCD_PEER_PORT:-2380}; APISERVER_PORT=${APISERVER_PORT:-6443}
+  KCM_PORT=${KCM_PORT:-10257}; SCHEDULER_PORT=${SCHEDULER_PORT:-10259}
+  KUBELET_PORT=${KUBELET_PORT:-10250}; KUBELET_HEALTHZ_PORT=${KUBELET_HEALTHZ_PORT:-10248}
+  KWOK_PORT=${KWOK_PORT:-10247}
+}
