@@ -74,9 +74,10 @@ build_pause() {
   local key; key=$(filesum "$HERE/go/pause/main.go" "$HERE/go/pause/go.mod" "$HERE/mkoci.py")
   if stamp_ok pause "$key" "$BIN/pause" "$SHARE/pause.tar"; then SKIPPED=1; return 0; fi
   (cd "$HERE/go/pause" && go build -trimpath -ldflags='-s -w' -o "$BIN/pause" .)
-  local t; t=$(mktemp -d); mkdir -p "$t/root"; cp "$BIN/pause" "$t/root/pause"
-  python3 "$HERE/mkoci.py" --name uavtest.local/pause:1 --entrypoint '["/pause"]' \
-    --out "$SHARE/pause.tar" --dir "$t/root" >/dev/null
+  local t; t=$(mktemp -d); mkdir -p "$t/root"/{dev,proc,sys,etc,tmp}; cp "$BIN/pause" "$t/root/pause"; chmod 1777 "$t/root/tmp"
+  python3 "$HERE/mkoci.py" layer "$t/root" "$t/layer.tar" >/dev/null
+  python3 "$HERE/mkoci.py" image --out "$SHARE/pause.tar" --name "$PAUSE_IMAGE" --entrypoint '["/pause"]' \
+    "$t/layer.tar" >/dev/null
   rm -rf "$t"
   stamp_set pause "$key"
 }

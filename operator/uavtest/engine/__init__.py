@@ -1,1 +1,24 @@
-"""uavtest.engine."""
+"""uavtest.engine: the local engine — N replicas as (sitl, runner) process pairs, then aggregation.
+
+``run_command`` is what ``uavtest run`` calls; ``aggregate_run`` (in ``uavtest.engine.aggregate``)
+is shared with the Kubernetes operator. Heavy modules are imported only when used.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from uavtest.engine.command import run_command
+
+if TYPE_CHECKING:
+    from uavtest.engine.aggregate import aggregate_run
+
+__all__ = ["aggregate_run", "run_command"]
+
+
+def __getattr__(name: str) -> Any:
+    if name == "aggregate_run":
+        from uavtest.engine.aggregate import aggregate_run
+
+        return aggregate_run
+    raise AttributeError(f"module 'uavtest.engine' has no attribute {name!r}")

@@ -78,7 +78,7 @@ class Vehicle(Model):
     simulator: Simulator = Field(Simulator.BUILTIN, description="builtin (uavtest sitl) or px4 (PX4 SITL)")
     image: str | None = Field(None, description="container image of the simulator (cluster engine only)")
     params: dict[str, ParamValue] = Field(
-        default_factory=dict, description="PX4 parameters set before flight, NAME: value"
+        default_factory=dict, max_length=1000, description="PX4 parameters set before flight, NAME: value"
     )
     params_file: str | None = Field(
         None, description="PX4 params CSV (NAME, value); relative to the test file; inlined by render"
@@ -127,7 +127,7 @@ class Wind(Model):
 
 class World(Model):
     home: Home = Field(default_factory=Home)
-    obstacles: list[Obstacle] = Field(default_factory=list)
+    obstacles: list[Obstacle] = Field(default_factory=list, max_length=100, description="box obstacles")
     wind: Wind = Field(default_factory=Wind)
 
 
@@ -180,7 +180,9 @@ class Mission(Model):
         None, description="inline QGroundControl .plan document (JSON as YAML)"
     )
     plan_file: str | None = Field(None, description="QGroundControl .plan file; inlined by render")
-    waypoints: list[Waypoint] | None = Field(None, description="NED waypoints, flown after takeoff")
+    waypoints: list[Waypoint] | None = Field(
+        None, max_length=1000, description="NED waypoints, flown after takeoff"
+    )
     takeoff_altitude: float = Field(10.0, gt=0, description="metres above home")
     takeoff_speed: float | None = Field(None, gt=0, description="climb speed m/s (PX4 MPC_TKO_SPEED)")
     land: bool = Field(True, description="land at the end of a waypoint mission")
@@ -263,7 +265,9 @@ class SimilarityMetric(StrEnum):
 class ReferenceTrajectory(Model):
     """A reference trajectory inline: rows of t (s), x, y, z (NED metres)."""
 
-    points: list[Annotated[list[float], Field(min_length=4, max_length=4)]] = Field(min_length=2)
+    points: list[Annotated[list[float], Field(min_length=4, max_length=4)]] = Field(
+        min_length=2, max_length=10000
+    )
 
 
 class Similarity(Model):
@@ -312,7 +316,9 @@ class UavTestSpec(Model):
     vehicle: Vehicle = Field(default_factory=Vehicle)
     world: World = Field(default_factory=World)
     mission: Mission | None = None
-    commands: list[Command] = Field(default_factory=list)
+    commands: list[Command] = Field(
+        default_factory=list, max_length=20000, description="timed commands on the vehicle clock"
+    )
     commands_file: str | None = Field(None, description="Aerialist commands CSV; inlined by render")
     assertions: Assertions = Field(default_factory=Assertions)
 

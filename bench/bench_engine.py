@@ -1,0 +1,106 @@
+"""Speed of the local engine on the competition's mission2, next to PX4 SIH on this machine.
+
+(a) real-time factor of one replica with the runner in the loop: simulated flight seconds per
+    wall second, start-up of both processes included (``uavtest run --replicas 1``);
+(b) throughput of ``uavtest run --replicas 40`` in flights per hour, J = number of cores.
+
+PX4 v1.15 SIH on this 2-core machine (issue 3): at most ~18x real time (speed factor 20 uses
+1.2 cores, higher factors fail), ~36 s of simulated boot, ~520 competition flights per hour.
+Targets: (a) >= 50x, aim 300x; (b) >= 1,500 flights/h, aim 5,000.
+
+    python bench/bench_engine.py [--replicas 40] [--single-runs 3] [--jobs J] [--test FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+SHARED = Path(os.environ.get("UAVTEST_SHARED_DATA", REPO.parent / "shared" / "data"))
+MISSION2 = SHARED / "competition" / "snippets" / "case_studies" / "mission2.yaml"
+
+PX4_SIH_RTF = 18.0
+PX4_SIH_FLIGHTS_PER_HOUR = 520.0
+
+
+def uavtest_run(test: Path, out: Path, *args: str) -> tuple[dict, float, int]:
+    """Run ``uavtest run --json``; the summary, the wall seconds and the exit code."""
+    cmd = [sys.executable, "-m", "uavtest.cli", "run", str(test), "--out", str(out), "--json", *args]
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    wall = time.perf_counter() - start
+    if proc.returncode not in (0, 1):
+        sys.stderr.write(proc.stderr[-3000:])
+        raise SystemExit(f"uavtest run exited {proc.returncode}: {' '.join(cmd)}")
+    return json.loads(proc.stdout), wall, proc.returncode
+
+
+def single_replica(test: Path, runs: int) -> None:
+    print(f"(a) one replica, runner in the loop, {test.name}, {runs} run(s)")
+    command_rtf, replica_rtf = [], []
+    for k in range(runs):
+        with tempfile.TemporaryDirectory(prefix="uavtest-bench-") as tmp:
+            summary, wall, _ = uavtest_run(test, Path(tmp), "--replicas", "1", "--seed", str(k))
+        result = summary["results"][0]
+        sim = result.get("sim_time") or 0.0
+        flight = (result.get("metrics") or {}).get("flight_time")
+        replica_wall = result.get("wall_time") or wall
+        command_rtf.append(sim / wall)
+        replica_rtf.append(sim / replica_wall)
+        print(
+            f"    run {k}: {result['verdict']}, simulated {sim:.1f} s (flight {flight} s), "
+            f"replica wall {replica_wall:.2f} s, whole command {wall:.2f} s"
+        )
+    print(
+        f"    real-time factor, replica (sitl + runner start-up to verdict): "
+        f"{statistics.median(replica_rtf):.0f}x   [target >= 50x, aim 300x; PX4 SIH <= {PX4_SIH_RTF:.0f}x]"
+    )
+    print(
+        f"    real-time factor, whole `uavtest run` (incl. aggregation, plot): "
+        f"{statistics.median(command_rtf):.0f}x"
+    )
+
+
+def throughput(test: Path, replicas: int, jobs: int | None) -> None:
+    extra = ["--jobs", str(jobs)] if jobs else []
+    print(f"(b) uavtest run --replicas {replicas} {' '.join(extra)} on {test.name}, {os.cpu_count()} cores")
+    with tempfile.TemporaryDirectory(prefix="uavtest-bench-") as tmp:
+        summary, wall, code = uavtest_run(test, Path(tmp), "--replicas", str(replicas), *extra)
+    sim = sum(r.get("sim_time") or 0.0 for r in summary["results"])
+    per_hour = replicas / wall * 3600.0
+    print(
+        f"    {summary['passed']} passed, {summary['failed']} failed, {summary['errors']} error "
+        f"(exit {code}) in {wall:.1f} s wall; {sim:.0f} simulated s in all ({sim / wall:.0f}x real time)"
+    )
+    print(
+        f"    throughput: {per_hour:,.0f} flights/h   "
+        f"[target >= 1,500, aim 5,000; PX4 SIH ~{PX4_SIH_FLIGHTS_PER_HOUR:,.0f}]"
+    )
+
+
+def main() -> None:
+    formatter = argparse.RawDescriptionHelpFormatter
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=formatter)
+    parser.add_argument("--test", type=Path, default=MISSION2)
+    parser.add_argument("--replicas", type=int, default=40)
+    parser.add_argument("--single-runs", type=int, default=3)
+    parser.add_argument("--jobs", type=int, default=None)
+    parser.add_argument("--skip-throughput", action="store_true")
+    args = parser.parse_args()
+    if not args.test.is_file():
+        raise SystemExit(f"{args.test} not found (set UAVTEST_SHARED_DATA to the real data folder)")
+    single_replica(args.test, args.single_runs)
+    if not args.skip_throughput:
+        throughput(args.test, args.replicas, args.jobs)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,227 @@
+"""A flight's metrics and verdict against the test's assertions (pure).
+
+``judge`` returns ``pass`` or ``fail``: an assertion that does not hold is the drone's fault.
+Bench errors (``error``) are decided by the runner, which knows whether the bench failed; an
+empty flight (the vehicle never took off) is judged like any other — a mission then is not
+completed, while a test with no mission and no other assertion passes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from uavtest.analysis.geometry import distances_to_obstacles
+from uavtest.analysis.mission import acceptance_radius, mission_targets, progress_from_waypoints
+from uavtest.analysis.models import AssertionResult, FlightMetrics, MissionProgress, Verdict
+from uavtest.analysis.similarity import similarity
+from uavtest.analysis.trajectory import Trajectory
+from uavtest.spec.models import Assertions, Geofence, Obstacle, ReferenceTrajectory, UavTestSpec
+
+__all__ = [
+    "geofence_violation",
+    "judge",
+    "judge_flight",
+    "reference_from_points",
+]
+
+
+def reference_from_points(reference: ReferenceTrajectory) -> Trajectory:
+    """An inline reference (rows t, x, y, z) as a Trajectory."""
+    rows = np.asarray(reference.points, dtype=np.float64)
+    return Trajectory(rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], np.zeros(len(rows)))
+
+
+def geofence_violation(trajectory: Trajectory, fence: Geofence) -> float:
+    """How far (metres, 3-D) the flight went furthest outside the fence box; 0 when always inside."""
+    if len(trajectory) == 0:
+        return 0.0
+    pos = trajectory.positions()
+    lo = np.array([fence.min_x, fence.min_y, fence.min_z])
+    hi = np.array([fence.max_x, fence.max_y, fence.max_z])
+    outside = np.maximum(lo - pos, 0.0) + np.maximum(pos - hi, 0.0)
+    return float(np.sqrt((outside**2).sum(axis=1)).max())
+
+
+def _fmt(v: float) -> str:
+    return f"{v:.2f}"
+
+
+def judge_flight(
+    trajectory: Trajectory,
+    assertions: Assertions,
+    *,
+    obstacles: Sequence[Obstacle] = (),
+    mission: MissionProgress | None = None,
+    mission_expected: bool = False,
+    reference: Trajectory | None = None,
+    vehicle_radius: float = 0.0,
+) -> tuple[FlightMetrics, list[AssertionResult], Verdict, str]:
+    """Measure the flight and check each assertion that applies.
+
+    ``mission_expected``: the test has a mission, so ``missionCompleted`` applies even when
+    ``mission`` (the progress) is unknown — then it fails saying so. Without an expected mission,
+    a known ``mission`` (e.g. from the log's ``mission_result``) is still checked.
+    """
+    flew = len(trajectory) > 0
+    results: list[AssertionResult] = []
+    metrics = FlightMetrics(
+        flight_time=trajectory.duration if flew else 0.0,
+        max_altitude=float(trajectory.altitude.max()) if flew else None,
+    )
+
+    # ----------------------------------------------------------------- obstacles
+    if obstacles and flew:
+        d = distances_to_obstacles(trajectory.x, trajectory.y, trajectory.z, obstacles, radius=vehicle_radius)
+        metrics.min_obstacle_distance = float(d.min())
+        metrics.collision = bool(d.min() <= 0.0)
+    if obstacles and assertions.no_collision:
+        hit = metrics.collision
+        where = ""
+        if hit:
+            first = int(np.argmax(d <= 0.0))
+            where = f" at t={trajectory.t[first]:.1f} s"
+        results.append(
+            AssertionResult(
+                name="noCollision",
+                passed=not hit,
+                value=metrics.min_obstacle_distance,
+                limit=0.0,
+                message=f"collision with an obstacle{where}" if hit else "no collision",
+            )
+        )
+    if obstacles and assertions.min_obstacle_distance is not None and flew:
+        limit = assertions.min_obstacle_distance
+        dist = metrics.min_obstacle_distance
+        assert dist is not None
+        ok = dist >= limit
+        msg = (
+            f"min distance {_fmt(dist)} m >= {_fmt(limit)} m"
+            if ok
+            else f"min distance {_fmt(dist)} m < {_fmt(limit)} m (short by {_fmt(limit - dist)} m)"
+        )
+        results.append(
+            AssertionResult(name="minObstacleDistance", passed=ok, value=dist, limit=limit, message=msg)
+        )
+
+    # ----------------------------------------------------------------- mission
+    if mission is not None:
+        metrics.mission_completed = mission.finished
+        metrics.waypoints_reached = mission.reached
+        metrics.waypoints_total = mission.total
+    if assertions.mission_completed and (mission_expected or mission is not None):
+        if mission is None:
+            results.append(
+                AssertionResult(
+                    name="missionCompleted",
+                    passed=False,
+                    message="mission progress unknown: no mission_result in the log, no waypoints to check",
+                )
+            )
+        else:
+            msg = f"mission {'completed' if mission.finished else 'not completed'}: "
+            msg += f"{mission.reached}/{mission.total} items reached ({mission.source})"
+            results.append(
+                AssertionResult(
+                    name="missionCompleted",
+                    passed=mission.finished,
+                    value=float(mission.reached),
+                    limit=float(mission.total),
+                    message=msg,
+                )
+            )
+
+    # ----------------------------------------------------------------- flight time
+    if assertions.max_flight_time is not None:
+        ft = metrics.flight_time or 0.0
+        limit = assertions.max_flight_time
+        ok = ft <= limit
+        results.append(
+            AssertionResult(
+                name="maxFlightTime",
+                passed=ok,
+                value=ft,
+                limit=limit,
+                message=f"flight time {ft:.1f} s {'<=' if ok else '>'} {limit:.1f} s",
+            )
+        )
+
+    # ----------------------------------------------------------------- geofence
+    if assertions.geofence is not None:
+        out = geofence_violation(trajectory, assertions.geofence)
+        metrics.geofence_violation = out
+        results.append(
+            AssertionResult(
+                name="geofence",
+                passed=out <= 0.0,
+                value=out,
+                limit=0.0,
+                message="inside the geofence" if out <= 0.0 else f"left the geofence by {_fmt(out)} m",
+            )
+        )
+
+    # ----------------------------------------------------------------- similarity
+    sim = assertions.similarity
+    if reference is None and sim is not None and sim.reference is not None:
+        reference = reference_from_points(sim.reference)
+    if reference is not None and len(reference) and flew:
+        metric = sim.metric.value if sim is not None else "dtw"
+        metrics.similarity = similarity(metric, trajectory, reference)
+        metrics.similarity_metric = metric
+    if sim is not None:
+        if metrics.similarity is None:
+            why = "no reference trajectory" if reference is None or not len(reference) else "no flight"
+            results.append(
+                AssertionResult(
+                    name="similarity", passed=False, limit=sim.threshold, message=f"cannot compare: {why}"
+                )
+            )
+        else:
+            v = metrics.similarity
+            ok = v <= sim.threshold
+            label = "DTW per step" if sim.metric.value == "dtw" else "Fréchet distance"
+            cmp = "<=" if ok else ">"
+            results.append(
+                AssertionResult(
+                    name="similarity",
+                    passed=ok,
+                    value=v,
+                    limit=sim.threshold,
+                    message=f"{label} to the reference {_fmt(v)} m {cmp} {_fmt(sim.threshold)} m",
+                )
+            )
+
+    failed = [r for r in results if not r.passed]
+    verdict = Verdict.FAIL if failed else Verdict.PASS
+    reason = "; ".join(r.message for r in failed)
+    return metrics, results, verdict, reason
+
+
+def judge(
+    trajectory: Trajectory,
+    spec: UavTestSpec,
+    *,
+    mission: MissionProgress | None = None,
+    reference: Trajectory | None = None,
+    vehicle_radius: float = 0.0,
+) -> tuple[FlightMetrics, list[AssertionResult], Verdict, str]:
+    """Metrics, assertion results, verdict (pass / fail) and reason of one flight of ``spec``.
+
+    ``mission``: progress from the log's ``mission_result``; when None and the test has a
+    mission, it is worked out from the path (``uavtest.analysis.mission``). ``reference``: the
+    reference trajectory for a ``similarity`` assertion (else its inline ``reference``).
+    """
+    if mission is None and spec.mission is not None:
+        targets = mission_targets(spec)
+        if targets:
+            mission = progress_from_waypoints(trajectory, targets, acceptance_radius=acceptance_radius(spec))
+    return judge_flight(
+        trajectory,
+        spec.assertions,
+        obstacles=spec.world.obstacles,
+        mission=mission,
+        mission_expected=spec.mission is not None,
+        reference=reference,
+        vehicle_radius=vehicle_radius,
+    )

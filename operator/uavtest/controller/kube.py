@@ -1,0 +1,100 @@
+"""The operator's own Kubernetes API calls (kopf makes the watch / list / patch calls it needs).
+
+Every call here is listed in ``API_CALLS``; the Helm chart's RBAC grants exactly those plus
+kopf's, and a unit test checks the two agree.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import kubernetes
+from kubernetes.client.exceptions import ApiException
+from kubernetes.config.config_exception import ConfigException
+
+from uavtest.controller import names
+
+__all__ = ["API_CALLS", "Kube", "api_client"]
+
+# (apiGroup, resource, verb) of every request the operator sends, kopf's included.
+API_CALLS: frozenset[tuple[str, str, str]] = frozenset(
+    {
+        # kopf: watch the custom resources, keep its progress annotations and finalizer on them
+        (names.API_GROUP, names.PLURAL, "list"),
+        (names.API_GROUP, names.PLURAL, "watch"),
+        (names.API_GROUP, names.PLURAL, "patch"),
+        # ours: status through the /status subresource
+        (names.API_GROUP, f"{names.PLURAL}/status", "patch"),
+        # kopf.adopt sets blockOwnerDeletion on children: clusters that enforce owner references
+        # (OwnerReferencesPermissionEnforcement) require update on the owner's finalizers
+        (names.API_GROUP, f"{names.PLURAL}/finalizers", "update"),
+        # kopf: discover and follow CRD changes (read-only)
+        ("apiextensions.k8s.io", "customresourcedefinitions", "list"),
+        ("apiextensions.k8s.io", "customresourcedefinitions", "watch"),
+        # children
+        ("batch", "jobs", "list"),
+        ("batch", "jobs", "watch"),
+        ("batch", "jobs", "create"),
+        ("", "configmaps", "create"),
+        ("", "pods", "list"),
+        ("", "pods", "watch"),
+        # kopf.event and kopf's own handler events
+        ("", "events", "create"),
+    }
+)
+
+
+def api_client() -> kubernetes.client.ApiClient:
+    """A client for the cluster the operator runs in, else the one KUBECONFIG points at."""
+    configuration = kubernetes.client.Configuration()
+    try:
+        kubernetes.config.load_incluster_config(client_configuration=configuration)
+    except ConfigException:
+        kubernetes.config.load_kube_config(client_configuration=configuration)
+    return kubernetes.client.ApiClient(configuration)
+
+
+class Kube:
+    """Creates children (idempotently: 409 Conflict means it exists) and patches UavTest status."""
+
+    def __init__(self, client: kubernetes.client.ApiClient) -> None:
+        self._client = client
+        self._core = kubernetes.client.CoreV1Api(client)
+        self._batch = kubernetes.client.BatchV1Api(client)
+        self._custom = kubernetes.client.CustomObjectsApi(client)
+
+    def close(self) -> None:
+        self._client.close()
+
+    def create_configmap(self, namespace: str, body: Mapping[str, Any]) -> bool:
+        """Create the ConfigMap; False when one of that name already exists."""
+        try:
+            self._core.create_namespaced_config_map(namespace, body)
+        except ApiException as e:
+            if e.status == 409:
+                return False
+            raise
+        return True
+
+    def create_job(self, namespace: str, body: Mapping[str, Any]) -> dict[str, Any] | None:
+        """Create the Job and return it as created; None when one of that name already exists."""
+        try:
+            created = self._batch.create_namespaced_job(namespace, body)
+        except ApiException as e:
+            if e.status == 409:
+                return None
+            raise
+        return self._client.sanitize_for_serialization(created)  # type: ignore[no-any-return]
+
+    def patch_status(self, namespace: str, name: str, status: Mapping[str, Any]) -> bool:
+        """Merge-patch ``status`` into the UavTest's /status; False when the UavTest is gone."""
+        try:
+            self._custom.patch_namespaced_custom_object_status(
+                names.API_GROUP, names.VERSION, namespace, names.PLURAL, name, {"status": dict(status)}
+            )
+        except ApiException as e:
+            if e.status == 404:
+                return False
+            raise
+        return True

@@ -1,0 +1,98 @@
+"""Every name the operator writes into the cluster, defined once.
+
+API group and resource, labels, annotations, container and volume names, condition types and
+reasons (the status vocabulary ``Phase``, ``ConditionType``, ``ConditionReason`` comes from
+``uavtest.spec.status``, which the CRD is generated from; ``Reason`` adds the operator's), Event
+reasons. Condition reasons and Event reasons are CamelCase constants (Kubernetes
+API conventions) and documented here, so users can match on them.
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+
+from uavtest.spec.models import API_GROUP, API_VERSION, KIND
+from uavtest.spec.status import ConditionReason, ConditionType, Phase
+
+__all__ = [
+    "API_GROUP",
+    "API_VERSION",
+    "CONTAINER_RUNNER",
+    "CONTAINER_SITL",
+    "FINALIZER",
+    "JOB_INDEX_ANNOTATION",
+    "JOB_INDEX_LABEL",
+    "KIND",
+    "LABEL_COMPONENT",
+    "LABEL_INSTANCE",
+    "LABEL_MANAGED_BY",
+    "LABEL_NAME",
+    "LABEL_PART_OF",
+    "LABEL_REPLICA",
+    "LABEL_RUN",
+    "LABEL_TEST",
+    "MANAGER",
+    "PLURAL",
+    "PROGRESS_PREFIX",
+    "TEST_FILE",
+    "TEST_MOUNT",
+    "VERSION",
+    "ConditionReason",
+    "ConditionType",
+    "EventReason",
+    "Phase",
+    "Reason",
+]
+
+VERSION = API_VERSION.split("/", 1)[1]
+PLURAL = "uavtests"
+
+# kopf's own bookkeeping lives under our API group, not under kopf.zalando.org.
+FINALIZER = f"{API_GROUP}/finalizer"
+PROGRESS_PREFIX = API_GROUP
+
+MANAGER = "uavtest-operator"
+
+# Recommended labels (app.kubernetes.io/*) and ours (uavtest.io/*).
+LABEL_NAME = "app.kubernetes.io/name"  # always "uavtest"
+LABEL_INSTANCE = "app.kubernetes.io/instance"  # the test's name
+LABEL_COMPONENT = "app.kubernetes.io/component"  # "replica" on Jobs, pods and ConfigMaps
+LABEL_PART_OF = "app.kubernetes.io/part-of"  # "uavtest"
+LABEL_MANAGED_BY = "app.kubernetes.io/managed-by"  # MANAGER
+LABEL_TEST = f"{API_GROUP}/test"  # the UavTest's name: maps a Job or pod to its parent
+LABEL_RUN = f"{API_GROUP}/run"  # the run id: one run per UavTest object (spec is immutable)
+# The replica index of a pod. Kubernetes stamps it on Indexed Job pods itself (JOB_INDEX_LABEL);
+# uavtest.io/replica is the name our metrics and docs use for the same number.
+LABEL_REPLICA = f"{API_GROUP}/replica"
+JOB_INDEX_LABEL = "batch.kubernetes.io/job-completion-index"
+JOB_INDEX_ANNOTATION = "batch.kubernetes.io/job-completion-index"
+
+CONTAINER_SITL = "sitl"
+CONTAINER_RUNNER = "runner"
+
+TEST_MOUNT = "/etc/uavtest"
+TEST_FILE = "test.yaml"
+
+
+class Reason(StrEnum):
+    """Condition reasons beyond the spec's ``ConditionReason`` (both are documented values)."""
+
+    AGGREGATING = "Aggregating"  # every index finished; reading results, writing aggregate/
+    STORE_UNAVAILABLE = "StoreUnavailable"  # aggregation could not reach the store; retried
+    AGGREGATED = "Aggregated"  # aggregate/ written, the counts are final
+    BENCH_ERRORS = "BenchErrors"  # no replica failed, but some ended in bench errors
+    DEADLINE_EXCEEDED = "DeadlineExceeded"  # the Job hit activeDeadlineSeconds
+    JOB_MISSING = "JobMissing"  # the Job disappeared before its replicas finished
+    INVALID_SPEC = "InvalidSpec"  # the spec cannot run in a cluster (e.g. file references)
+
+
+class EventReason(StrEnum):
+    """Reasons of the Kubernetes Events the operator posts on a UavTest."""
+
+    JOB_CREATED = "JobCreated"
+    TEST_PASSED = "TestPassed"
+    TEST_FAILED = "TestFailed"
+    FLAKY_TEST = "FlakyTest"
+    REPLICA_ERROR = "ReplicaError"
+    STORE_UNAVAILABLE = "StoreUnavailable"
+    INVALID_SPEC = "InvalidSpec"

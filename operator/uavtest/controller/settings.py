@@ -1,0 +1,77 @@
+"""The operator's configuration, from environment variables (pydantic-settings).
+
+Everything is prefixed ``UAVTEST_OPERATOR_`` (e.g. ``UAVTEST_OPERATOR_RUNNER_IMAGE``); the store's
+own endpoint and credentials are the store's variables (``UAVTEST_S3_ENDPOINT``, ...). The Helm
+chart sets these from ``values.yaml``. Nothing secret is held here: replica pods get the S3
+credentials from the Secret named by ``s3_secret`` through ``secretKeyRef``.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+__all__ = ["OperatorSettings", "Resources"]
+
+
+class Resources(BaseModel):
+    """Requests and limits of one container (Kubernetes quantity strings)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    cpu_request: str = "100m"
+    memory_request: str = "128Mi"
+    cpu_limit: str | None = None
+    memory_limit: str | None = "1Gi"
+
+    def manifest(self) -> dict[str, dict[str, str]]:
+        limits = {k: v for k, v in (("cpu", self.cpu_limit), ("memory", self.memory_limit)) if v}
+        out: dict[str, dict[str, str]] = {
+            "requests": {"cpu": self.cpu_request, "memory": self.memory_request}
+        }
+        if limits:
+            out["limits"] = limits
+        return out
+
+
+class OperatorSettings(BaseSettings):
+    """How the operator builds replica Jobs and where their artifacts go."""
+
+    model_config = SettingsConfigDict(
+        env_prefix="UAVTEST_OPERATOR_", env_nested_delimiter="__", extra="ignore"
+    )
+
+    runner_image: str = Field("uavtest-runner:latest", description="image with `uavtest` (sitl + runner)")
+    image_pull_policy: Literal["Always", "IfNotPresent", "Never"] = "IfNotPresent"
+    px4_image: str | None = Field(
+        None, description="PX4 SITL image for vehicle.simulator: px4 (a test's vehicle.image wins)"
+    )
+    px4_args: list[str] = Field(default_factory=list, description="arguments for the PX4 SITL container")
+
+    store_url: str = Field("s3://uavtest", description="s3://bucket[/prefix] the replicas write to")
+    pod_s3_endpoint: str | None = Field(
+        None, description="S3 endpoint as pods reach it (default: the operator's UAVTEST_S3_ENDPOINT)"
+    )
+    pod_s3_secure: bool | None = Field(None, description="default: the operator's UAVTEST_S3_SECURE")
+    s3_secret: str = Field(
+        "uavtest-s3", description="Secret (in the test's namespace) with the store's credentials"
+    )
+    s3_access_key_key: str = "accessKey"
+    s3_secret_key_key: str = "secretKey"
+
+    backoff_limit_per_index: int = Field(2, ge=0, description="retries of one replica after bench errors")
+    job_ttl_seconds: int | None = Field(86400, ge=0, description="ttlSecondsAfterFinished of replica Jobs")
+    deadline_margin_seconds: int = Field(300, ge=0, description="added to activeDeadlineSeconds")
+    max_parallelism: int | None = Field(None, ge=1, description="cap on a Job's parallelism")
+    run_as_user: int = 65532
+    runtime_default_seccomp: bool = True
+
+    sitl_resources: Resources = Field(default_factory=Resources)
+    runner_resources: Resources = Field(default_factory=Resources)
+
+    aggregate_retry_seconds: float = Field(
+        30.0, gt=0, description="how often aggregation is retried while the store is unreachable"
+    )
+    metrics_port: int = Field(8080, ge=0, le=65535, description="Prometheus metrics port (0: off)")

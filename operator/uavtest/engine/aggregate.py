@@ -1,0 +1,109 @@
+"""A run's aggregation: replicas' artifacts in a store → ``aggregate/`` and a ``RunSummary``.
+
+Shared by the local engine (LocalStore) and the Kubernetes operator (S3Store): it knows the
+store layout and ``uavtest.analysis``, nothing about how the replicas were flown.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from pydantic import ValidationError
+
+from uavtest.analysis.models import ReplicaResult, RunSummary, Verdict
+from uavtest.analysis.trajectory import Trajectory
+from uavtest.errors import UavTestError
+from uavtest.spec.models import UavTestSpec
+from uavtest.store import ArtifactStore
+from uavtest.store.layout import aggregate_key, replica_key
+
+__all__ = ["aggregate_run", "load_replica"]
+
+
+def _missing(index: int, seed: int, what: str) -> ReplicaResult:
+    return ReplicaResult(index=index, seed=seed, verdict=Verdict.ERROR, reason=f"artifacts missing: {what}")
+
+
+def load_replica(
+    store: ArtifactStore, namespace: str, test: str, run_id: str, index: int, seed: int
+) -> tuple[ReplicaResult, Trajectory | None]:
+    """One replica's result and (for pass / fail) trajectory; an ``error`` result when missing.
+
+    A replica whose result.json is absent or unreadable, or whose pass / fail has no readable
+    trajectory.csv, becomes ``error`` with the reason — it is never dropped from the run.
+    """
+    result_key = replica_key(namespace, test, run_id, index, "result.json")
+    if not store.exists(result_key):
+        return _missing(index, seed, result_key), None
+    try:
+        result = ReplicaResult.model_validate_json(store.get(result_key))
+    except ValidationError as e:
+        reason = f"unreadable {result_key}: {e.errors()[0]['msg']}"
+        return ReplicaResult(index=index, seed=seed, verdict=Verdict.ERROR, reason=reason), None
+    if result.verdict == Verdict.ERROR:
+        return result, None
+    traj_key = replica_key(namespace, test, run_id, index, "trajectory.csv")
+    if not store.exists(traj_key):
+        return result.model_copy(
+            update={"verdict": Verdict.ERROR, "reason": f"artifacts missing: {traj_key}"}
+        ), None
+    try:
+        trajectory = Trajectory.from_csv(store.get(traj_key).decode(errors="replace"), source=traj_key)
+    except UavTestError as e:
+        return result.model_copy(update={"verdict": Verdict.ERROR, "reason": str(e)}), None
+    return result, trajectory
+
+
+def _reference(spec: UavTestSpec) -> Trajectory | None:
+    """The inline reference trajectory of a similarity assertion (a rendered test has one)."""
+    similarity = spec.assertions.similarity
+    if similarity is None or similarity.reference is None:
+        return None
+    t, x, y, z = zip(*similarity.reference.points, strict=True)
+    return Trajectory(t, x, y, z)
+
+
+def aggregate_run(
+    store: ArtifactStore,
+    namespace: str,
+    test: str,
+    run_id: str,
+    indices: Iterable[int],
+    spec: UavTestSpec,
+) -> RunSummary:
+    """Read the replicas ``indices`` of a run, write ``aggregate/*`` and return the summary.
+
+    Writes ``aggregate/summary.json`` always, and ``aggregate/average.csv`` and
+    ``aggregate/trajectories.png`` when at least one replica has a trajectory.
+    """
+    from uavtest.analysis.average import average_trajectories
+    from uavtest.analysis.flakiness import summarize
+    from uavtest.analysis.plots import plot_run
+
+    results: list[ReplicaResult] = []
+    trajectories: list[Trajectory] = []
+    for index in sorted(set(indices)):
+        result, trajectory = load_replica(store, namespace, test, run_id, index, spec.replica_seed(index))
+        results.append(result)
+        if trajectory is not None and len(trajectory) >= 2 and trajectory.duration > 0:
+            trajectories.append(trajectory)
+    summary = summarize(results, test=test, namespace=namespace, run_id=run_id)
+    if trajectories:
+        average = average_trajectories(trajectories)
+        store.put(
+            aggregate_key(namespace, test, run_id, "average.csv"), average.to_csv().encode(), "text/csv"
+        )
+        png = plot_run(
+            trajectories,
+            average=average,
+            reference=_reference(spec),
+            obstacles=spec.world.obstacles,
+            title=f"{test} · run {run_id} · {summary.passed} passed, {summary.failed} failed",
+        )
+        store.put(aggregate_key(namespace, test, run_id, "trajectories.png"), png, "image/png")
+    store.put(
+        aggregate_key(namespace, test, run_id, "summary.json"),
+        summary.model_dump_json(indent=2).encode(),
+        "application/json",
+    )
+    return summary

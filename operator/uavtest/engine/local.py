@@ -1,0 +1,284 @@
+"""The local engine: N replicas of a test, J at a time, on this machine; then aggregation.
+
+Artifacts go to a ``LocalStore`` under ``--out`` with the object-store layout (namespace
+``local``): ``local/<test>/<run-id>/replica-<i>/...`` and ``.../aggregate/...``.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import threading
+from concurrent.futures import Future, ThreadPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field
+from pydantic_settings import BaseSettings, SettingsConfigDict
+from rich.console import Console, Group, RenderableType
+from rich.live import Live
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from uavtest.analysis.models import ReplicaResult, RunSummary
+from uavtest.engine.ports import PX4_MAX_INSTANCES, PortAllocator
+from uavtest.engine.replica import DEFAULT_RETRIES, ReplicaJob, run_replica
+from uavtest.errors import BadInput
+from uavtest.spec.models import Simulator, UavTest
+from uavtest.store.layout import aggregate_key, replica_prefix, run_prefix
+
+__all__ = [
+    "NAMESPACE",
+    "EngineSettings",
+    "LocalRun",
+    "RunOptions",
+    "aerialist_simulator_notice",
+    "new_run_id",
+    "run_local",
+]
+
+NAMESPACE = "local"
+_AERIALIST_SIMULATORS = {"ros", "gazebo", "jmavsim"}
+
+
+class EngineSettings(BaseSettings):
+    """Environment of the local engine: ``UAVTEST_PX4_BIN`` names a PX4 SITL binary."""
+
+    model_config = SettingsConfigDict(env_prefix="UAVTEST_", extra="ignore")
+
+    px4_bin: Path | None = None
+
+
+class RunOptions(BaseModel):
+    """``uavtest run`` options for the local engine."""
+
+    model_config = ConfigDict(frozen=True)
+
+    test: Path
+    replicas: int | None = Field(None, description="overrides spec.replicas")
+    jobs: int | None = Field(None, description="replicas at once; default spec.parallelism or cores")
+    out: Path = Path("runs")
+    seed: int | None = Field(None, description="base seed; overrides spec.seed")
+    replica: int | None = Field(None, description="fly only this replica (a replay)")
+    retries: int = Field(DEFAULT_RETRIES, ge=0)
+
+
+@dataclass(slots=True)
+class LocalRun:
+    """A finished local run: its summary and where its artifacts are."""
+
+    summary: RunSummary
+    run_dir: Path
+    summary_path: Path
+    plot_path: Path | None
+    notices: list[str] = field(default_factory=list)
+
+
+def new_run_id(now: datetime | None = None) -> str:
+    """A run id: UTC timestamp plus a short random suffix, e.g. ``20250101-120000-a1b2``."""
+    now = now or datetime.now(UTC)
+    return f"{now:%Y%m%d-%H%M%S}-{secrets.token_hex(2)}"
+
+
+def aerialist_simulator_notice(path: Path) -> str | None:
+    """A notice when an Aerialist / competition file names a simulator we replace by builtin."""
+    try:
+        raw: Any = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError):
+        return None  # load_test has already reported what is wrong with the file
+    if not isinstance(raw, dict) or raw.get("kind") == "UavTest":
+        return None
+    simulation = raw.get("simulation")
+    simulator = simulation.get("simulator") if isinstance(simulation, dict) else None
+    if isinstance(simulator, str) and simulator.strip().lower() in _AERIALIST_SIMULATORS:
+        return (
+            f"{path.name} asks for the '{simulator.strip()}' simulator; "
+            "uavtest flies it with its built-in simulator (uavtest sitl)"
+        )
+    return None
+
+
+def _bad(field_name: str, message: str, value: object, allowed: str) -> BadInput:
+    return BadInput(message, field=field_name, value=value, allowed=allowed)
+
+
+def _px4_bin(test: UavTest, settings: EngineSettings, source: Path) -> Path | None:
+    if test.spec.vehicle.simulator != Simulator.PX4:
+        return None
+    path = settings.px4_bin
+    if path is None:
+        raise BadInput(
+            "vehicle.simulator px4 needs a PX4 SITL binary: set UAVTEST_PX4_BIN "
+            "(e.g. PX4-Autopilot/build/px4_sitl_default/bin/px4), or use simulator: builtin",
+            file=str(source),
+            field="spec.vehicle.simulator",
+            value="px4",
+        )
+    if not (path.is_file() and os.access(path, os.X_OK)):
+        raise BadInput(
+            "UAVTEST_PX4_BIN does not name an executable file",
+            field="UAVTEST_PX4_BIN",
+            value=str(path),
+            allowed="the path of PX4's bin/px4 from a px4_sitl build",
+        )
+    return path
+
+
+def _last_line(path: Path, limit: int = 400) -> str:
+    """The last line a process wrote to its log (its latest stage), cheaply."""
+    try:
+        with path.open("rb") as f:
+            f.seek(0, os.SEEK_END)
+            f.seek(max(0, f.tell() - limit))
+            lines = [ln for ln in f.read().decode(errors="replace").splitlines() if ln.strip()]
+    except OSError:
+        return ""
+    return lines[-1].strip()[:80] if lines and not lines[-1].startswith("--- attempt") else ""
+
+
+class _Board:
+    """Live display: a bar over all replicas and one status line per replica.
+
+    While a replica flies, its line shows the runner's latest log line (its stage).
+    """
+
+    def __init__(self, seeds: dict[int, int], logs: dict[int, Path]) -> None:
+        self.seeds = seeds
+        self.logs = logs
+        self.status: dict[int, str] = dict.fromkeys(seeds, "waiting")
+        self.progress = Progress(
+            TextColumn("[bold]{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+        )
+        self.task = self.progress.add_task("replicas", total=len(seeds))
+
+    def set(self, index: int, status: str) -> None:
+        self.status[index] = status
+
+    def done(self, result: ReplicaResult) -> None:
+        m = result.metrics
+        extra = ""
+        if m is not None and m.min_obstacle_distance is not None:
+            extra = f" · min distance {m.min_obstacle_distance:.2f} m"
+        reason = f" · {result.reason[:70]}" if result.reason else ""
+        self.status[result.index] = f"{result.verdict.value}{extra}{reason}"
+        self.progress.advance(self.task)
+
+    def __rich__(self) -> RenderableType:
+        lines = Table.grid(padding=(0, 2))
+        lines.add_column(justify="right")
+        lines.add_column(justify="right")
+        lines.add_column()
+        for i, status in self.status.items():
+            if status.startswith("flying"):
+                stage = _last_line(self.logs[i])
+                status = f"{status} · {stage}" if stage else status
+            colour = {"pass": "green", "fail": "red", "error": "yellow"}.get(status.split(" ")[0], "")
+            text = f"[{colour}]{status}[/]" if colour else status
+            lines.add_row(f"replica {i}", f"seed {self.seeds[i]}", text)
+        return Group(self.progress, lines)
+
+
+def _fly_all(
+    jobs: list[ReplicaJob],
+    parallel: int,
+    store: Any,
+    board: _Board,
+    console: Console,
+) -> None:
+    ports = PortAllocator()
+    cancel = threading.Event()
+    with (
+        Live(board, console=console, refresh_per_second=4, transient=False),
+        ThreadPoolExecutor(max_workers=parallel, thread_name_prefix="replica") as pool,
+    ):
+        futures: list[Future[ReplicaResult]] = [
+            pool.submit(run_replica, job, ports=ports, store=store, on_status=board.set, cancel=cancel)
+            for job in jobs
+        ]
+        try:
+            for future in as_completed(futures):
+                board.done(future.result())
+        except BaseException:
+            cancel.set()  # every replica stops its processes; the pool then drains
+            for f in futures:
+                f.cancel()
+            raise
+
+
+def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRun:
+    """Fly a test's replicas locally and aggregate them; raises BadInput before flying anything."""
+    from uavtest.engine.aggregate import aggregate_run
+    from uavtest.spec.loaders import load_test
+    from uavtest.store import LocalStore
+
+    console = console or Console(stderr=True)
+    test = load_test(options.test)
+    notices = [n for n in [aerialist_simulator_notice(options.test)] if n]
+    for n in notices:
+        console.print(f"[cyan]notice:[/] {n}", highlight=False)
+    px4_bin = _px4_bin(test, EngineSettings(), options.test)
+
+    replicas = options.replicas if options.replicas is not None else test.spec.replicas
+    if replicas < 1:
+        raise _bad("--replicas", "need at least one replica", replicas, "1 or more")
+    if options.seed is not None and options.seed < 0:
+        raise _bad("--seed", "the base seed must not be negative", options.seed, "0 or more")
+    if options.replica is not None and not 0 <= options.replica < replicas:
+        raise _bad("--replica", "no such replica in this run", options.replica, f"0..{replicas - 1}")
+    jobs_wanted = options.jobs if options.jobs is not None else test.spec.parallelism or os.cpu_count() or 1
+    if jobs_wanted < 1:
+        raise _bad("--jobs", "need at least one job", jobs_wanted, "1 or more")
+
+    seed = options.seed if options.seed is not None else test.spec.seed
+    spec = test.spec.model_copy(update={"replicas": replicas, "seed": seed})
+    indices = [options.replica] if options.replica is not None else list(range(replicas))
+    parallel = min(jobs_wanted, len(indices))
+    if px4_bin is not None:
+        parallel = min(parallel, PX4_MAX_INSTANCES)
+
+    name = test.metadata.name
+    run_id = new_run_id()
+    out = options.out.resolve()
+    store = LocalStore(out)
+    wall_timeout = spec.timeout + 120.0 if px4_bin is None else 1.5 * spec.timeout + 180.0
+    jobs = [
+        ReplicaJob(
+            test_path=options.test.resolve(),
+            test_name=name,
+            namespace=NAMESPACE,
+            run_id=run_id,
+            index=i,
+            seed=spec.replica_seed(i),
+            store_url=str(out),
+            out_dir=store.root / replica_prefix(NAMESPACE, name, run_id, i),
+            simulator=spec.vehicle.simulator,
+            px4_bin=px4_bin,
+            wall_timeout=wall_timeout,
+            retries=options.retries,
+        )
+        for i in indices
+    ]
+    console.print(
+        f"run [bold]{run_id}[/] of [bold]{name}[/]: {len(indices)} replica(s), {parallel} at a time, "
+        f"artifacts in {store.root / run_prefix(NAMESPACE, name, run_id)}",
+        highlight=False,
+    )
+    board = _Board({j.index: j.seed for j in jobs}, {j.index: j.out_dir / "runner.stderr.log" for j in jobs})
+    _fly_all(jobs, parallel, store, board, console)
+
+    summary = aggregate_run(store, NAMESPACE, name, run_id, indices, spec)
+    summary_path = store.path(aggregate_key(NAMESPACE, name, run_id, "summary.json"))
+    plot_path = store.path(aggregate_key(NAMESPACE, name, run_id, "trajectories.png"))
+    return LocalRun(
+        summary=summary,
+        run_dir=summary_path.parent.parent,
+        summary_path=summary_path,
+        plot_path=plot_path if plot_path.exists() else None,
+        notices=notices,
+    )

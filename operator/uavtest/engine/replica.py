@@ -1,0 +1,449 @@
+"""One replica: a simulator process and a runner process on free ports, retried on bench errors.
+
+The simulator is ``uavtest sitl --lockstep`` (or PX4 SITL from ``UAVTEST_PX4_BIN``); the runner
+is ``uavtest runner`` (process contract 4 in DESIGN.md). Both write their stderr to files in the
+replica's output folder. When the runner ends, the simulator is stopped. The runner's exit code
+says pass (0), fail (1) or bench error (3); ``result.json`` in the store is the source of truth.
+A bench error — runner exit 3, a crashed process, a wall-clock overrun — is retried with the
+same seed a bounded number of times; a replica that still errors is reported ``error`` with its
+reason, never dropped.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from uavtest.analysis.models import ReplicaResult, Verdict
+from uavtest.engine.ports import PortAllocator, ReplicaPorts
+from uavtest.errors import UavTestError
+from uavtest.spec.models import Simulator
+from uavtest.store import ArtifactStore
+from uavtest.store.layout import replica_key
+
+__all__ = [
+    "DEFAULT_RETRIES",
+    "ExitOutcome",
+    "ProcessPlan",
+    "ReplicaJob",
+    "StatusCallback",
+    "classify_exit",
+    "plan_processes",
+    "px4_etc_dir",
+    "run_replica",
+]
+
+log = logging.getLogger(__name__)
+
+DEFAULT_RETRIES = 2
+SIM_DEATH_GRACE = 15.0  # wall seconds the runner gets to notice a simulator that died
+STOP_GRACE = 5.0  # wall seconds between SIGTERM and SIGKILL
+POLL = 0.05
+
+StatusCallback = Callable[[int, str], None]
+
+
+class ReplicaJob(BaseModel):
+    """Everything one replica needs: which test, which seed, where artifacts and logs go."""
+
+    model_config = ConfigDict(frozen=True)
+
+    test_path: Path = Field(description="the test file as the user gave it (runner and sim load it)")
+    test_name: str
+    namespace: str = "local"
+    run_id: str
+    index: int = Field(ge=0)
+    seed: int
+    store_url: str = Field(description="what the runner's --store gets (a path or s3:// URL)")
+    out_dir: Path = Field(description="this replica's folder for the processes' stderr")
+    simulator: Simulator = Simulator.BUILTIN
+    px4_bin: Path | None = None
+    wall_timeout: float = Field(gt=0, description="wall seconds one attempt may take before it is killed")
+    retries: int = Field(DEFAULT_RETRIES, ge=0)
+    sim_death_grace: float = Field(
+        SIM_DEATH_GRACE, gt=0, description="wall seconds the runner gets to notice a dead simulator"
+    )
+    python: str = Field(default_factory=lambda: sys.executable)
+
+
+@dataclass(frozen=True, slots=True)
+class ProcessPlan:
+    """The two command lines of one attempt, and where the simulator runs."""
+
+    sim: list[str]
+    runner: list[str]
+    sim_cwd: Path | None = None
+    sim_env: dict[str, str] | None = None
+
+
+PlanBuilder = Callable[[ReplicaJob, ReplicaPorts, Path], ProcessPlan]
+
+
+def px4_etc_dir(px4_bin: Path) -> Path:
+    """PX4's ROMFS folder next to the binary's bin/ (build/px4_sitl_default/etc)."""
+    return px4_bin.resolve().parent.parent / "etc"
+
+
+def plan_processes(job: ReplicaJob, ports: ReplicaPorts, log_dir: Path) -> ProcessPlan:
+    """The simulator and runner command lines for one attempt (process contract 4)."""
+    test = str(job.test_path)
+    runner = [
+        job.python,
+        "-m",
+        "uavtest.cli",
+        "runner",
+        "--test",
+        test,
+        "--replica",
+        str(job.index),
+        "--seed",
+        str(job.seed),
+        "--connect",
+        f"udpin:127.0.0.1:{ports.api}",
+        "--store",
+        job.store_url,
+        "--run-id",
+        job.run_id,
+        "--namespace",
+        job.namespace,
+        "--test-name",
+        job.test_name,
+        "--log-dir",
+        str(log_dir),
+    ]
+    if job.simulator == Simulator.PX4:
+        if job.px4_bin is None or ports.instance is None:
+            raise ValueError("a PX4 replica needs px4_bin and a PX4 instance number")
+        env = dict(os.environ)
+        env.setdefault("PX4_SIM_MODEL", "sihsim_quadx")
+        sim = [str(job.px4_bin), "-i", str(ports.instance), "-d", str(px4_etc_dir(job.px4_bin))]
+        # PX4 writes its logs under <working dir>/log/<date>/; the runner collects them there.
+        runner[runner.index("--log-dir") + 1] = str(log_dir / "log")
+        return ProcessPlan(sim=sim, runner=runner, sim_cwd=log_dir, sim_env=env)
+    sim = [
+        job.python,
+        "-m",
+        "uavtest.cli",
+        "sitl",
+        "--test",
+        test,
+        "--seed",
+        str(job.seed),
+        "--host",
+        "127.0.0.1",
+        "--api-port",
+        str(ports.api),
+        "--gcs-port",
+        str(ports.gcs),
+        "--api-local-port",
+        "0",
+        "--gcs-local-port",
+        "0",
+        "--log-dir",
+        str(log_dir),
+        "--lockstep",
+    ]
+    return ProcessPlan(sim=sim, runner=runner)
+
+
+# --------------------------------------------------------------------------- exit codes
+
+
+@dataclass(frozen=True, slots=True)
+class ExitOutcome:
+    """What a runner's exit code says: a verdict, or an error and whether a retry may help."""
+
+    verdict: Verdict
+    retryable: bool
+    reason: str = ""
+
+
+def _signal_name(code: int) -> str:
+    try:
+        return signal.Signals(-code).name
+    except ValueError:
+        return f"signal {-code}"
+
+
+def classify_exit(code: int) -> ExitOutcome:
+    """Map a runner exit code: 0 pass, 1 fail, 3 bench error (retry), 2 bad input, else a crash."""
+    if code == 0:
+        return ExitOutcome(Verdict.PASS, retryable=False)
+    if code == 1:
+        return ExitOutcome(Verdict.FAIL, retryable=False)
+    if code == 3:
+        return ExitOutcome(Verdict.ERROR, retryable=True, reason="runner reported a bench error")
+    if code == 2:
+        return ExitOutcome(Verdict.ERROR, retryable=False, reason="runner rejected the test (exit 2)")
+    if code < 0:
+        return ExitOutcome(Verdict.ERROR, retryable=True, reason=f"runner killed by {_signal_name(code)}")
+    return ExitOutcome(Verdict.ERROR, retryable=True, reason=f"runner crashed (exit {code})")
+
+
+# --------------------------------------------------------------------------- processes
+
+
+@dataclass(slots=True)
+class _AttemptFiles:
+    runner_out: Path
+    runner_err: Path
+    sim_err: Path
+
+
+@dataclass(slots=True)
+class _AttemptEnd:
+    runner_code: int | None
+    sim_code: int | None
+    note: str = ""  # why the engine stopped the runner (timeout, simulator died, cancelled)
+    sim_note: str = ""  # the simulator exited by itself with an error before the runner ended
+    cancelled: bool = False
+
+
+def _stop(proc: subprocess.Popen[bytes]) -> int:
+    """SIGTERM the process (its own session), SIGKILL after a grace; return its exit code."""
+    if proc.poll() is not None:
+        return proc.returncode
+    for sig, grace in ((signal.SIGTERM, STOP_GRACE), (signal.SIGKILL, STOP_GRACE)):
+        try:
+            os.killpg(proc.pid, sig)
+        except ProcessLookupError:
+            break
+        try:
+            return proc.wait(timeout=grace)
+        except subprocess.TimeoutExpired:
+            continue
+    return proc.wait()
+
+
+def _tail(path: Path, lines: int = 1) -> str:
+    """The last non-empty lines of a log file, for a reason."""
+    try:
+        text = path.read_text(errors="replace")
+    except OSError:
+        return ""
+    kept = [ln.strip() for ln in text.splitlines() if ln.strip() and not ln.startswith("--- attempt")]
+    return " | ".join(kept[-lines:])[:300]
+
+
+def _fly(
+    plan: ProcessPlan,
+    files: _AttemptFiles,
+    attempt: int,
+    job: ReplicaJob,
+    cancel: threading.Event,
+) -> _AttemptEnd:
+    """Start runner and simulator, wait for the runner, stop the simulator."""
+    header = f"--- attempt {attempt} ---\n".encode()
+    with (
+        files.runner_out.open("ab") as r_out,
+        files.runner_err.open("ab") as r_err,
+        files.sim_err.open("ab") as s_err,
+    ):
+        for f in (r_out, r_err, s_err):
+            f.write(header)
+            f.flush()
+        # The runner binds the API port; start it first so the simulator's first packets land.
+        runner = subprocess.Popen(
+            plan.runner, stdin=subprocess.DEVNULL, stdout=r_out, stderr=r_err, start_new_session=True
+        )
+        try:
+            sim = subprocess.Popen(
+                plan.sim,
+                stdin=subprocess.DEVNULL,
+                stdout=subprocess.DEVNULL,
+                stderr=s_err,
+                cwd=plan.sim_cwd,
+                env=plan.sim_env,
+                start_new_session=True,
+            )
+        except OSError as e:
+            _stop(runner)
+            return _AttemptEnd(None, None, note=f"cannot start the simulator {plan.sim[0]}: {e}")
+        end = _AttemptEnd(None, None)
+        deadline = time.monotonic() + job.wall_timeout
+        sim_died_at: float | None = None
+        try:
+            while True:
+                try:
+                    end.runner_code = runner.wait(timeout=POLL)
+                    break
+                except subprocess.TimeoutExpired:
+                    pass
+                now = time.monotonic()
+                if cancel.is_set():
+                    end.cancelled, end.note = True, "cancelled"
+                    end.runner_code = _stop(runner)
+                    break
+                if sim_died_at is None and sim.poll() not in (None, 0):
+                    sim_died_at = now
+                if sim_died_at is not None and now - sim_died_at > job.sim_death_grace:
+                    end.note = f"simulator exited with code {sim.returncode}: {_tail(files.sim_err)}"
+                    end.runner_code = _stop(runner)
+                    break
+                if now > deadline:
+                    end.note = f"replica did not finish within {job.wall_timeout:g} s wall time"
+                    end.runner_code = _stop(runner)
+                    break
+        finally:
+            if runner.poll() is None:
+                _stop(runner)
+            sim_alive = sim.poll() is None
+            end.sim_code = _stop(sim)
+            if not sim_alive and end.sim_code not in (0, None):
+                end.sim_note = f"simulator exited with code {end.sim_code}: {_tail(files.sim_err)}"
+    return end
+
+
+# --------------------------------------------------------------------------- results
+
+
+def _read_result(store: ArtifactStore, job: ReplicaJob) -> ReplicaResult | str:
+    """result.json of this replica from the store, or why it cannot be used."""
+    key = replica_key(job.namespace, job.test_name, job.run_id, job.index, "result.json")
+    try:
+        if not store.exists(key):
+            return "runner wrote no result.json"
+        return ReplicaResult.model_validate_json(store.get(key))
+    except ValidationError as e:
+        return f"unreadable result.json: {e.errors()[0]['msg']}"
+    except UavTestError as e:  # a store failure is a bench error of this replica, not of the run
+        return f"cannot read result.json from the store: {e}"
+
+
+def _last_json_line(path: Path) -> ReplicaResult | None:
+    """The runner prints its ReplicaResult as the last stdout line; a fallback to result.json."""
+    try:
+        lines = [ln for ln in path.read_text(errors="replace").splitlines() if ln.strip()]
+    except OSError:
+        return None
+    if not lines or lines[-1].startswith("--- attempt"):
+        return None
+    try:
+        return ReplicaResult.model_validate_json(lines[-1])
+    except ValidationError:
+        return None
+
+
+@dataclass(slots=True)
+class _Judged:
+    result: ReplicaResult | None  # pass / fail from the store
+    reason: str = ""  # error reason otherwise
+    retryable: bool = True
+
+
+def _judge_attempt(end: _AttemptEnd, files: _AttemptFiles, store: ArtifactStore, job: ReplicaJob) -> _Judged:
+    if end.runner_code is None:
+        return _Judged(None, end.note or "runner did not start")
+    if end.note:
+        return _Judged(None, end.note)
+    outcome = classify_exit(end.runner_code)
+    stored = _read_result(store, job)
+    if outcome.verdict in (Verdict.PASS, Verdict.FAIL):
+        if isinstance(stored, str):
+            return _Judged(None, f"runner exited {end.runner_code} but {stored}")
+        if stored.verdict == Verdict.ERROR:
+            return _Judged(None, stored.reason or "runner reported a bench error")
+        return _Judged(stored)
+    # An error: the runner's own reason (result.json, then its last stdout line), else stderr.
+    reason = end.sim_note
+    if not isinstance(stored, str) and stored.verdict == Verdict.ERROR:
+        reason = stored.reason
+    if not reason:
+        printed = _last_json_line(files.runner_out)
+        if printed is not None and printed.verdict == Verdict.ERROR:
+            reason = printed.reason
+    if not reason:
+        tail = _tail(files.runner_err)
+        reason = f"{outcome.reason}: {tail}" if tail else outcome.reason
+    return _Judged(None, reason, retryable=outcome.retryable)
+
+
+def _write_result(store: ArtifactStore, job: ReplicaJob, result: ReplicaResult) -> None:
+    key = replica_key(job.namespace, job.test_name, job.run_id, job.index, "result.json")
+    store.put(key, result.model_dump_json(indent=2).encode(), "application/json")
+
+
+@dataclass(slots=True)
+class _Attempts:
+    reasons: list[str] = field(default_factory=list)
+
+
+def run_replica(
+    job: ReplicaJob,
+    *,
+    ports: PortAllocator,
+    store: ArtifactStore,
+    plan: PlanBuilder = plan_processes,
+    on_status: StatusCallback | None = None,
+    cancel: threading.Event | None = None,
+) -> ReplicaResult:
+    """Fly one replica, retrying bench errors with the same seed; always returns a result.
+
+    The returned result is also what ``result.json`` holds afterwards: the runner's, with
+    ``attempts`` and the engine's wall time (start-up included), or an ``error`` the engine
+    wrote when the runner could not.
+    """
+    cancel = cancel or threading.Event()
+    status = on_status or (lambda _i, _s: None)
+    job.out_dir.mkdir(parents=True, exist_ok=True)
+    files = _AttemptFiles(
+        runner_out=job.out_dir / "runner.stdout.log",
+        runner_err=job.out_dir / "runner.stderr.log",
+        sim_err=job.out_dir / "sim.stderr.log",
+    )
+    history = _Attempts()
+    started = time.monotonic()
+    attempts = 0
+    final: ReplicaResult | None = None
+    for attempt in range(1, job.retries + 2):
+        attempts = attempt
+        status(job.index, "flying" if attempt == 1 else f"flying (attempt {attempt})")
+        with (
+            ports.lease(px4=job.simulator == Simulator.PX4) as p,
+            tempfile.TemporaryDirectory(prefix=f"uavtest-replica-{job.index}-") as tmp,
+        ):
+            end = _fly(plan(job, p, Path(tmp)), files, attempt, job, cancel)
+        if end.cancelled:
+            history.reasons.append("cancelled")
+            break
+        judged = _judge_attempt(end, files, store, job)
+        if judged.result is not None:
+            final = judged.result
+            break
+        history.reasons.append(judged.reason)
+        if not judged.retryable or attempt > job.retries:
+            break
+        log.warning(
+            "replica %d (seed %d): attempt %d/%d was a bench error: %s; retrying with the same seed",
+            job.index,
+            job.seed,
+            attempt,
+            job.retries + 1,
+            judged.reason,
+        )
+        status(job.index, f"retry {attempt}: {judged.reason[:60]}")
+    wall = round(time.monotonic() - started, 3)
+    if final is None:
+        last = history.reasons[-1] if history.reasons else "no attempt ran"
+        reason = last if attempts == 1 else f"{last} (after {attempts} attempts)"
+        final = ReplicaResult(
+            index=job.index, seed=job.seed, verdict=Verdict.ERROR, reason=reason, attempts=attempts
+        )
+    final = final.model_copy(update={"attempts": attempts, "wall_time": wall})
+    try:
+        _write_result(store, job, final)
+    except UavTestError as e:  # the verdict still reaches the summary through the return value
+        log.error("replica %d: cannot write result.json: %s", job.index, e)
+    status(job.index, final.verdict.value)
+    return final

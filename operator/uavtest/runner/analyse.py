@@ -1,0 +1,112 @@
+"""Stage 7: the replica's verdict, from what the core saw and the flight log.
+
+Bench faults (the core's error, a missing or unreadable log) are ``error`` with the reason and are
+never judged; otherwise ``uavtest.analysis.judge`` decides ``pass`` or ``fail`` from the log.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from pathlib import Path
+
+from uavtest.analysis.models import FlightMetrics, ReplicaResult, Verdict
+from uavtest.analysis.trajectory import Trajectory
+from uavtest.analysis.ulog import mission_progress_from_ulog, read_ulog, trajectory_from_ulog
+from uavtest.analysis.verdict import judge
+from uavtest.errors import UavTestError
+from uavtest.runner.core import FlightReport
+from uavtest.spec.models import UavTestSpec
+
+__all__ = ["Analysis", "analyse", "online_metrics"]
+
+log = logging.getLogger(__name__)
+
+
+class Analysis:
+    """The result and the trajectory (None when there is no readable log)."""
+
+    def __init__(self, result: ReplicaResult, trajectory: Trajectory | None) -> None:
+        self.result = result
+        self.trajectory = trajectory
+
+
+def online_metrics(report: FlightReport) -> FlightMetrics | None:
+    """What the runner measured during the flight (for a replica that could not be judged)."""
+    if report.start_ms is None:
+        return None
+    return FlightMetrics(
+        flight_time=None,
+        min_obstacle_distance=report.min_distance if math.isfinite(report.min_distance) else None,
+        collision=report.collision is not None,
+        geofence_violation=report.geofence_violation or None,
+    )
+
+
+def _reference(spec: UavTestSpec) -> Trajectory | None:
+    sim = spec.assertions.similarity
+    if sim is None or sim.log_file is None:
+        return None
+    return trajectory_from_ulog(read_ulog(Path(sim.log_file)), source=sim.log_file)
+
+
+def analyse(
+    report: FlightReport,
+    log_path: Path | None,
+    spec: UavTestSpec,
+    *,
+    index: int,
+    seed: int,
+    log_error: str | None = None,
+    wall_time: float | None = None,
+) -> Analysis:
+    """Judge one replica. ``log_error`` says why there is no log when ``log_path`` is None."""
+
+    def error(reason: str, trajectory: Trajectory | None = None) -> Analysis:
+        result = ReplicaResult(
+            index=index,
+            seed=seed,
+            verdict=Verdict.ERROR,
+            reason=reason,
+            metrics=online_metrics(report),
+            sim_time=report.sim_time,
+            wall_time=wall_time,
+        )
+        return Analysis(result, trajectory)
+
+    trajectory: Trajectory | None = None
+    ulog = None
+    read_error: str | None = None
+    if log_path is not None:
+        try:
+            ulog = read_ulog(log_path)
+            trajectory = trajectory_from_ulog(ulog, source=str(log_path))
+        except UavTestError as e:
+            read_error = f"log unreadable: {e}"
+    if report.error:
+        return error(report.error, trajectory)
+    if log_path is None:
+        return error(log_error or "log missing")
+    if ulog is None or trajectory is None:
+        return error(read_error or "log unreadable")
+    try:
+        reference = _reference(spec)
+    except UavTestError as e:
+        return error(f"reference log for the similarity assertion: {e}", trajectory)
+    metrics, assertions, verdict, reason = judge(
+        trajectory, spec, mission=mission_progress_from_ulog(ulog), reference=reference
+    )
+    log.info("verdict %s%s", verdict, f": {reason}" if reason else "")
+    return Analysis(
+        ReplicaResult(
+            index=index,
+            seed=seed,
+            verdict=verdict,
+            reason=reason,
+            assertions=assertions,
+            metrics=metrics,
+            sim_time=report.sim_time,
+            wall_time=wall_time,
+        ),
+        trajectory,
+    )

@@ -1,0 +1,255 @@
+"""Stage 4: the test's timed commands, on the vehicle clock (pure state machine).
+
+A command whose time has come (or passed) becomes one or more steps, run one at a time in order:
+COMMAND_LONG steps wait for their COMMAND_ACK (resent on silence, bounded), sticks steps take
+effect at once. Aerialist semantics: ``mode mission`` or ``mode takeoff`` while disarmed arms
+first. While sticks are active MANUAL_CONTROL goes out every ``stick_period_ms`` of vehicle time;
+a switch to a mode that flies by itself (mission, hold, return, land, takeoff) or a disarm ends
+them. A refused arm is retried every second of vehicle time (PX4 refuses until its preflight
+checks pass) for ``arm_give_up_s``; other refusals are noted and the flight goes on (the vehicle
+decided — the verdict will tell); no ACK at all, or UNSUPPORTED, is a bench error.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass
+from enum import Enum
+
+from uavtest.runner.events import CommandAck, CommandLong, ManualControl, Outgoing
+from uavtest.runner.px4 import (
+    AUTO_MODES,
+    FORCE_DISARM_MAGIC,
+    MODE_FLAG_CUSTOM_MODE_ENABLED,
+    PX4_MODES,
+    AckResult,
+    Cmd,
+    result_name,
+)
+from uavtest.spec.models import Command, CommandAction, FlightMode, Sticks
+
+__all__ = [
+    "CommandScheduler",
+    "Step",
+    "StepKind",
+    "arm_command",
+    "disarm_command",
+    "expand",
+    "manual_control",
+    "mode_command",
+    "speed_command",
+]
+
+log = logging.getLogger(__name__)
+
+
+class StepKind(Enum):
+    ARM = "arm"
+    DISARM = "disarm"
+    MODE = "mode"
+    SPEED = "speed"
+    STICKS = "sticks"
+
+
+@dataclass(frozen=True, slots=True)
+class Step:
+    kind: StepKind
+    label: str
+    command: CommandLong | None = None  # None for sticks
+    mode: FlightMode | None = None
+    sticks: ManualControl | None = None
+
+
+def arm_command() -> CommandLong:
+    return CommandLong(Cmd.COMPONENT_ARM_DISARM, (1.0, 0, 0, 0, 0, 0, 0))
+
+
+def disarm_command(*, force: bool = False) -> CommandLong:
+    return CommandLong(Cmd.COMPONENT_ARM_DISARM, (0.0, FORCE_DISARM_MAGIC if force else 0.0, 0, 0, 0, 0, 0))
+
+
+def mode_command(mode: FlightMode) -> CommandLong:
+    main, sub = PX4_MODES[mode]
+    return CommandLong(
+        Cmd.DO_SET_MODE, (float(MODE_FLAG_CUSTOM_MODE_ENABLED), float(main), float(sub), 0, 0, 0, 0)
+    )
+
+
+def speed_command(speed: float) -> CommandLong:
+    return CommandLong(Cmd.DO_CHANGE_SPEED, (1.0, float(speed), -1.0, 0, 0, 0, 0))
+
+
+def manual_control(sticks: Sticks) -> ManualControl:
+    return ManualControl(
+        x=round(sticks.x * 1000), y=round(sticks.y * 1000), z=round(sticks.z * 1000), r=round(sticks.r * 1000)
+    )
+
+
+def expand(command: Command) -> list[Step]:
+    """The steps of one command (before knowing whether the vehicle is armed: arming is skipped
+    at run time when it already is)."""
+    action = command.action
+    if action is CommandAction.ARM:
+        return [Step(StepKind.ARM, "arm", arm_command())]
+    if action is CommandAction.DISARM:
+        return [Step(StepKind.DISARM, "disarm", disarm_command())]
+    if action is CommandAction.SPEED:
+        assert command.speed is not None
+        return [Step(StepKind.SPEED, f"speed {command.speed:g}", speed_command(command.speed))]
+    if action is CommandAction.STICKS:
+        assert command.sticks is not None
+        mc = manual_control(command.sticks)
+        return [Step(StepKind.STICKS, f"sticks {mc.x},{mc.y},{mc.z},{mc.r}", sticks=mc)]
+    assert command.mode is not None
+    steps = [Step(StepKind.MODE, f"mode {command.mode.value}", mode_command(command.mode), mode=command.mode)]
+    if command.mode in (FlightMode.MISSION, FlightMode.TAKEOFF):
+        steps.insert(0, Step(StepKind.ARM, f"arm (for mode {command.mode.value})", arm_command()))
+    return steps
+
+
+class CommandScheduler:
+    """Runs the commands at their vehicle times; ``error`` is set on a bench fault."""
+
+    def __init__(
+        self,
+        commands: Sequence[Command],
+        *,
+        ack_timeout_s: float = 1.0,
+        send_attempts: int = 5,
+        arm_retry_ms: int = 1000,
+        arm_give_up_ms: int = 60_000,
+        stick_period_ms: int = 50,
+    ) -> None:
+        self._pending = deque(sorted(commands, key=lambda c: c.at))
+        self._steps: deque[Step] = deque()
+        self.ack_timeout_s = ack_timeout_s
+        self.send_attempts = send_attempts
+        self.arm_retry_ms = arm_retry_ms
+        self.arm_give_up_ms = arm_give_up_ms
+        self.stick_period_ms = stick_period_ms
+        self.error: str | None = None
+        self.notes: list[str] = []  # refusals the vehicle made; shown in the log and the result
+        self.sent: list[tuple[int, str]] = []  # (vehicle ms, label) of every step started
+        self.sticks: ManualControl | None = None
+        self._last_stick_ms = -math.inf
+        self._current: Step | None = None
+        self._confirmation = 0
+        self._ack_deadline = math.inf
+        self._retry_at_ms: float | None = None  # a refused arm waits for this vehicle time
+        self._first_refusal_ms: int | None = None
+
+    @property
+    def idle(self) -> bool:
+        """No command left to run or waiting for its ACK (sticks may still be streaming)."""
+        return not self._pending and not self._steps and self._current is None
+
+    @property
+    def next_at_ms(self) -> float:
+        """Vehicle time of the next command not yet due (inf when none)."""
+        return self._pending[0].at * 1000.0 if self._pending else math.inf
+
+    @property
+    def ack_deadline(self) -> float:
+        return self._ack_deadline
+
+    def update(self, now_ms: int, wall: float, *, armed: bool) -> list[Outgoing]:
+        """Run what is due at vehicle time ``now_ms``: new steps, resends, sticks."""
+        if self.error:
+            return []
+        out: list[Outgoing] = []
+        while self._pending and self._pending[0].at * 1000.0 <= now_ms:
+            self._steps.extend(expand(self._pending.popleft()))
+        if self._current is not None:
+            out += self._resend_if_due(now_ms, wall)
+        while self._current is None and self._steps and not self.error:
+            out += self._start(self._steps.popleft(), now_ms, wall, armed=armed)
+        if self.sticks is not None and now_ms - self._last_stick_ms >= self.stick_period_ms:
+            self._last_stick_ms = now_ms
+            out.append(self.sticks)
+        return out
+
+    def _start(self, step: Step, now_ms: int, wall: float, *, armed: bool) -> list[Outgoing]:
+        if step.kind is StepKind.ARM and armed:
+            return []
+        if step.kind is StepKind.DISARM and not armed:
+            return []
+        self.sent.append((now_ms, step.label))
+        log.info("t=%.2f s: %s", now_ms / 1000, step.label)
+        if step.kind is StepKind.STICKS:
+            self.sticks = step.sticks
+            self._last_stick_ms = -math.inf
+            return []
+        if step.kind is StepKind.DISARM:
+            self.sticks = None
+        assert step.command is not None
+        self._current = step
+        self._confirmation = 0
+        self._first_refusal_ms = None
+        self._retry_at_ms = None
+        self._ack_deadline = wall + self.ack_timeout_s
+        return [step.command]
+
+    def _resend_if_due(self, now_ms: int, wall: float) -> list[Outgoing]:
+        step = self._current
+        assert step is not None and step.command is not None
+        if self._retry_at_ms is not None:
+            if now_ms < self._retry_at_ms:
+                return []
+            self._retry_at_ms = None
+            self._confirmation = 0
+            self._ack_deadline = wall + self.ack_timeout_s
+            return [step.command]
+        if wall < self._ack_deadline:
+            return []
+        if self._confirmation + 1 >= self.send_attempts:
+            self.error = f"no COMMAND_ACK for {step.label} after {self.send_attempts} tries"
+            self._ack_deadline = math.inf
+            return []
+        self._confirmation += 1
+        self._ack_deadline = wall + self.ack_timeout_s
+        log.warning("no ACK for %s; sending it again (%d)", step.label, self._confirmation + 1)
+        c = step.command
+        return [CommandLong(c.command, c.params, confirmation=self._confirmation)]
+
+    def handle_ack(self, ack: CommandAck, now_ms: int, wall: float) -> None:
+        step = self._current
+        if step is None or step.command is None or ack.command != step.command.command:
+            return
+        result = ack.result
+        if result == AckResult.ACCEPTED:
+            if step.kind is StepKind.MODE and step.mode in AUTO_MODES:
+                self.sticks = None
+            self._done()
+            return
+        if result == AckResult.IN_PROGRESS:
+            self._ack_deadline = wall + 5 * self.ack_timeout_s
+            return
+        name = result_name(AckResult, result)
+        if result == AckResult.UNSUPPORTED:
+            self.error = f"vehicle does not support {step.label} (COMMAND_ACK {name})"
+            self._done()
+            return
+        if step.kind is StepKind.ARM:
+            if self._first_refusal_ms is None:
+                self._first_refusal_ms = now_ms
+            if now_ms - self._first_refusal_ms >= self.arm_give_up_ms:
+                self.error = (
+                    f"vehicle refused to arm for {self.arm_give_up_ms / 1000:g} s (COMMAND_ACK {name})"
+                )
+                self._done()
+                return
+            self._retry_at_ms = now_ms + self.arm_retry_ms
+            self._ack_deadline = math.inf
+            return
+        note = f"t={now_ms / 1000:.2f} s: vehicle refused {step.label} (COMMAND_ACK {name})"
+        log.warning(note)
+        self.notes.append(note)
+        self._done()
+
+    def _done(self) -> None:
+        self._current = None
+        self._ack_deadline = math.inf
+        self._retry_at_ms = None

@@ -1,0 +1,465 @@
+"""The runner core: one replica's flight as a pure state machine (no sockets, no clocks).
+
+Fed decoded messages (``uavtest.runner.events``) and the wall clock, it returns the messages to
+send. Stages run in order — connect, params, mission, flight, settle, (log download), done — and
+the core ends with a ``FlightReport``. The edge (``uavtest.runner.session``) moves the bytes.
+
+Two clocks: protocol retries (params, mission, ACKs) run on the wall clock, because a lockstep
+simulator answers while its clock stands still; commands, GCS heartbeats, the timeout and the
+monitor run on the vehicle clock (time_boot_ms). In lockstep (the simulator announced
+``LOCKSTEP``) the core grants vehicle time in ``step_ms`` steps and does all its flight work
+between grants, so a run is deterministic; setup (params, mission) happens with the clock held.
+Without announces (real PX4) the vehicle runs on its own and the core follows its telemetry.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+from uavtest.runner.commands import CommandScheduler, StepKind, disarm_command
+from uavtest.runner.events import (
+    CommandAck,
+    ExtendedSysState,
+    GcsHeartbeat,
+    GlobalPosition,
+    Heartbeat,
+    Incoming,
+    LocalPosition,
+    LockstepAnnounce,
+    LockstepGrant,
+    LogData,
+    LogEntry,
+    MissionAck,
+    MissionItemInt,
+    MissionItemReached,
+    MissionRequest,
+    Outgoing,
+    ParamValue,
+    StatusText,
+    VehicleTime,
+)
+from uavtest.runner.logdownload import LogDownloader
+from uavtest.runner.mission import MissionUploader
+from uavtest.runner.monitor import FlightMonitor
+from uavtest.runner.params import ParamSetter
+from uavtest.runner.px4 import AckResult, Autopilot, Cmd, LandedState, MavType, mode_name, result_name
+from uavtest.spec.models import Command, Geofence, Obstacle
+
+__all__ = ["CoreConfig", "Ending", "FlightReport", "ReplicaCore", "Stage"]
+
+log = logging.getLogger(__name__)
+
+
+class Stage(StrEnum):
+    CONNECT = "connect"
+    PARAMS = "params"
+    MISSION = "mission"
+    FLIGHT = "flight"
+    SETTLE = "settle"  # the verdict is settled: disarming so the log closes
+    LOG = "log"  # downloading the log over MAVLink
+    DONE = "done"
+
+
+class Ending(StrEnum):
+    """Why the flight stage ended."""
+
+    LANDED = "landed"  # armed, flew, disarmed, no command left
+    COLLISION = "collision"
+    TIMEOUT = "timeout"
+    ERROR = "error"  # a bench fault: see FlightReport.error
+
+
+@dataclass(frozen=True, slots=True)
+class CoreConfig:
+    """Everything the core needs to know about the test, already in wire form."""
+
+    endpoint: str = "udpin:127.0.0.1:14540"
+    params: dict[str, float | int] = field(default_factory=dict)
+    mission: Sequence[MissionItemInt] = ()
+    commands: Sequence[Command] = ()
+    obstacles: Sequence[Obstacle] = ()
+    geofence: Geofence | None = None
+    timeout_s: float = 600.0  # vehicle seconds from the start of the flight stage
+    connect_timeout_s: float = 30.0  # wall seconds until the first heartbeat
+    position_timeout_s: float = 120.0  # wall seconds from the heartbeat until a position
+    silence_s: float = 10.0  # wall seconds without any message before the vehicle counts as gone
+    step_ms: int = 50  # lockstep grant size
+    heartbeat_ms: int = 1000  # GCS heartbeat period
+    retry_s: float = 1.0  # protocol retry interval (wall)
+    settle_s: float = 3.0  # wall seconds to wait for the disarm after the verdict is settled
+    download_log: bool = False  # stage 6 over MAVLink (PX4 without a shared log directory)
+
+
+@dataclass(slots=True)
+class FlightReport:
+    """What the core saw: the input to the verdict (with the log) and to the result."""
+
+    ending: Ending | None = None
+    error: str | None = None
+    lockstep: bool = False
+    vehicle: Heartbeat | None = None
+    start_ms: int | None = None  # vehicle time the flight stage began
+    end_ms: int | None = None  # vehicle time the flight stage ended
+    armed_ever: bool = False
+    airborne: bool = False
+    min_distance: float = math.inf
+    collision: LocalPosition | None = None
+    geofence_violation: float = 0.0
+    mission_total: int = 0
+    mission_reached: set[int] = field(default_factory=set)
+    notes: list[str] = field(default_factory=list)
+    status_texts: list[str] = field(default_factory=list)
+    grants: int = 0
+    log_data: bytes | None = None
+
+    @property
+    def sim_time(self) -> float | None:
+        if self.start_ms is None or self.end_ms is None:
+            return None
+        return (self.end_ms - self.start_ms) / 1000.0
+
+
+class ReplicaCore:
+    """The stage machine. Call ``start``, then ``handle`` per message and ``tick`` now and then."""
+
+    def __init__(self, config: CoreConfig) -> None:
+        self.cfg = config
+        self.stage = Stage.CONNECT
+        self.report = FlightReport(mission_total=len(config.mission))
+        self.now_ms = 0  # vehicle clock: the latest time_boot_ms seen
+        self.armed = False
+        self.landed_state = int(LandedState.UNDEFINED)
+        self.monitor = FlightMonitor(config.obstacles, config.geofence)
+        self.params = ParamSetter(config.params, retry_s=config.retry_s)
+        self.uploader = MissionUploader(config.mission, retry_s=config.retry_s)
+        self.scheduler = CommandScheduler(config.commands, ack_timeout_s=config.retry_s)
+        self.downloader = LogDownloader(retry_s=config.retry_s)
+        self._have_local = False
+        self._have_global = False
+        self._waiting_at: int | None = None  # a lockstep announce not yet granted
+        self._last_grant: LockstepGrant | None = None
+        self._last_rx = 0.0
+        self._deadline = math.inf  # connect / position / settle deadline (wall)
+        self._next_wall_heartbeat = 0.0
+        self._last_hb_ms = -math.inf
+        self._settle_tries = 0
+
+    # ------------------------------------------------------------------ public
+
+    @property
+    def done(self) -> bool:
+        return self.stage is Stage.DONE
+
+    @property
+    def lockstep(self) -> bool:
+        return self.report.lockstep
+
+    def start(self, wall: float) -> list[Outgoing]:
+        """Begin: wait for the vehicle (a udpin link has nobody to talk to until it speaks)."""
+        self._last_rx = wall
+        self._deadline = wall + self.cfg.connect_timeout_s
+        return []
+
+    def handle(self, msg: Incoming, wall: float) -> list[Outgoing]:
+        """One decoded message from the vehicle."""
+        self._last_rx = wall
+        # the hot messages first: positions and lockstep announces arrive every step
+        if isinstance(msg, LocalPosition):
+            return self._on_position(msg, wall)
+        if isinstance(msg, LockstepAnnounce):
+            return self._on_announce(msg, wall)
+        if isinstance(msg, Heartbeat):
+            return self._on_heartbeat(msg, wall)
+        if isinstance(msg, GlobalPosition | VehicleTime):
+            if msg.time_ms > self.now_ms:
+                self.now_ms = msg.time_ms
+            if isinstance(msg, GlobalPosition) and not self._have_global:
+                self._have_global = True
+                return self._advance(wall)
+            return []
+        if isinstance(msg, CommandAck):
+            return self._on_command_ack(msg, wall)
+        if isinstance(msg, ExtendedSysState):
+            self.landed_state = msg.landed_state
+            return []
+        if isinstance(msg, MissionItemReached):
+            self.report.mission_reached.add(msg.seq)
+            return []
+        if isinstance(msg, StatusText):
+            text = f"t={self.now_ms / 1000:.2f} s: {msg.text}"
+            self.report.status_texts.append(text)
+            log.info("vehicle says: %s", text)
+            return []
+        if isinstance(msg, ParamValue) and self.stage is Stage.PARAMS:
+            return self.params.handle(msg, wall) + self._advance(wall)
+        if isinstance(msg, MissionRequest | MissionAck) and self.stage is Stage.MISSION:
+            return self.uploader.handle(msg, wall) + self._advance(wall)
+        if isinstance(msg, LogEntry | LogData) and self.stage is Stage.LOG:
+            return self.downloader.handle(msg, wall) + self._advance(wall)
+        return []  # MissionCurrent, and answers that belong to no running stage
+
+    def tick(self, wall: float) -> list[Outgoing]:
+        """Time passed on the wall clock: retries, deadlines, and (without lockstep) the flight."""
+        stage = self.stage
+        if stage is Stage.DONE:
+            return []
+        if stage is not Stage.CONNECT and wall - self._last_rx > self.cfg.silence_s:
+            silent = f"no MAVLink message for {self.cfg.silence_s:g} s (simulator died?)"
+            return self._fail(f"vehicle on {self.cfg.endpoint} went silent: {silent}")
+        out: list[Outgoing] = []
+        setup = stage in (Stage.CONNECT, Stage.PARAMS, Stage.MISSION, Stage.LOG)
+        if setup and self.report.vehicle and wall >= self._next_wall_heartbeat:
+            self._next_wall_heartbeat = wall + self.cfg.heartbeat_ms / 1000.0
+            out.append(GcsHeartbeat())
+        if stage is Stage.CONNECT:
+            if wall >= self._deadline:
+                if self.report.vehicle is None:
+                    return self._fail(
+                        f"no heartbeat from {self.cfg.endpoint} within {self.cfg.connect_timeout_s:g} s"
+                    )
+                waited = f"{self.cfg.position_timeout_s:g} s"
+                return self._fail(f"vehicle on {self.cfg.endpoint} sent no position within {waited}")
+            if self.lockstep and self._last_grant and wall - self._last_rx > self.cfg.retry_s:
+                out.append(self._last_grant)  # the grant or the announce got lost
+        elif stage is Stage.PARAMS:
+            out += self.params.tick(wall)
+        elif stage is Stage.MISSION:
+            out += self.uploader.tick(wall)
+        elif stage is Stage.FLIGHT:
+            if self.lockstep:
+                if self._last_grant and wall - self._last_rx > self.cfg.retry_s:
+                    out.append(self._last_grant)
+            else:
+                out += self._flight_step(wall)
+        elif stage is Stage.SETTLE:
+            out += self._settle_tick(wall)
+        elif stage is Stage.LOG:
+            out += self.downloader.tick(wall)
+        return out + self._advance(wall)
+
+    # ------------------------------------------------------------------ messages
+
+    def _on_position(self, p: LocalPosition, wall: float) -> list[Outgoing]:
+        if p.time_ms > self.now_ms:
+            self.now_ms = p.time_ms
+        if self.stage is Stage.FLIGHT:
+            self.monitor.on_position(p)
+            if not self.lockstep:
+                return self._flight_step(wall)
+            return []
+        if not self._have_local:
+            self._have_local = True
+            return self._advance(wall)
+        return []
+
+    def _on_heartbeat(self, hb: Heartbeat, wall: float) -> list[Outgoing]:
+        if hb.autopilot == Autopilot.INVALID or hb.type in (MavType.GCS, MavType.ONBOARD_CONTROLLER):
+            return []  # another ground station or companion, not the vehicle
+        first = self.report.vehicle is None
+        before = self.report.vehicle
+        if before is None or hb.custom_mode != before.custom_mode or hb.armed != self.armed:
+            state = "armed" if hb.armed else "disarmed"
+            log.info("vehicle %d/%d: %s, %s", hb.sysid, hb.compid, mode_name(hb.custom_mode), state)
+        self.report.vehicle = hb
+        self.armed = hb.armed
+        if hb.armed and self.stage is Stage.FLIGHT:
+            self.report.armed_ever = True
+        if first:
+            self._deadline = wall + self.cfg.position_timeout_s
+            return [GcsHeartbeat(), *self._advance(wall)]
+        return self._advance(wall)
+
+    def _on_announce(self, a: LockstepAnnounce, wall: float) -> list[Outgoing]:
+        if not self.report.lockstep:
+            log.info("vehicle runs in lockstep: granting %d ms steps", self.cfg.step_ms)
+            self.report.lockstep = True
+        if a.time_ms > self.now_ms:
+            self.now_ms = a.time_ms
+        self._waiting_at = a.time_ms
+        out = self._advance(wall)
+        if self.stage is Stage.CONNECT:
+            out.append(self._grant())  # the vehicle needs time to produce a position
+        elif self.stage is Stage.FLIGHT:
+            out += self._flight_step(wall)
+            if self.stage is Stage.FLIGHT:
+                out.append(self._grant())
+        return out
+
+    def _on_command_ack(self, ack: CommandAck, wall: float) -> list[Outgoing]:
+        if self.stage is Stage.FLIGHT:
+            accepted = self.scheduler.handle_ack(ack, self.now_ms, wall)
+            if accepted is not None and accepted.kind in (StepKind.ARM, StepKind.DISARM):
+                # the heartbeat (1 Hz) will confirm it; until then trust the ACK
+                self.armed = accepted.kind is StepKind.ARM
+                self.report.armed_ever |= self.armed
+            if not self.lockstep:
+                return self._flight_step(wall)
+            return []
+        if self.stage is Stage.SETTLE and ack.command == Cmd.COMPONENT_ARM_DISARM:
+            if ack.result == AckResult.ACCEPTED:
+                self.armed = False
+            else:  # e.g. already disarmed after a crash: nothing more to do
+                self.report.notes.append(f"force disarm answered {result_name(AckResult, ack.result)}")
+            return self._end_settle(wall)
+        return []
+
+    # ------------------------------------------------------------------ stages
+
+    def _grant(self) -> LockstepGrant:
+        seen = self._waiting_at if self._waiting_at is not None else self.now_ms
+        step = self.cfg.step_ms
+        if self.scheduler.sticks is not None:
+            step = min(step, 100)  # MANUAL_CONTROL at >= 10 Hz of vehicle time
+        nxt = self.scheduler.next_at_ms
+        if seen < nxt < seen + step:
+            step = max(1, math.ceil(nxt - seen))  # land exactly on the next command's time
+        grant = LockstepGrant(seen, seen + step)
+        self._waiting_at = None
+        self._last_grant = grant
+        self.report.grants += 1
+        return grant
+
+    def _advance(self, wall: float) -> list[Outgoing]:
+        """Move through the stages whose work is finished."""
+        out: list[Outgoing] = []
+        while True:
+            stage = self.stage
+            if stage is Stage.CONNECT:
+                if not (self.report.vehicle and self._have_local and self._have_global):
+                    return out
+                log.info("connected at vehicle time %.2f s", self.now_ms / 1000)
+                self.stage = Stage.PARAMS
+                out += self.params.start(wall)
+            elif stage is Stage.PARAMS:
+                if not self.params.done:
+                    return out
+                if self.params.error:
+                    return out + self._fail(self.params.error)
+                self.stage = Stage.MISSION
+                if self.cfg.mission:
+                    out += self.uploader.start(wall)
+                else:
+                    self.uploader.done = True
+            elif stage is Stage.MISSION:
+                if not self.uploader.done:
+                    return out
+                if self.uploader.error:
+                    return out + self._fail(self.uploader.error)
+                self.stage = Stage.FLIGHT
+                self.report.start_ms = self.now_ms
+                self.report.armed_ever = self.armed
+                log.info("flight starts at vehicle time %.2f s", self.now_ms / 1000)
+                if self.lockstep and self._waiting_at is not None:
+                    out += self._flight_step(wall)
+                    if self.stage is Stage.FLIGHT:
+                        out.append(self._grant())
+                elif not self.lockstep:
+                    out += self._flight_step(wall)
+                return out
+            elif stage is Stage.LOG:
+                if not self.downloader.done:
+                    return out
+                if self.downloader.error:
+                    self.report.error = self.downloader.error
+                self.report.log_data = self.downloader.data
+                self.stage = Stage.DONE
+                return out
+            else:
+                return out
+
+    def _flight_step(self, wall: float) -> list[Outgoing]:
+        """The flight's work at the current vehicle time: commands, heartbeat, checks."""
+        now = self.now_ms
+        out = self.scheduler.update(now, wall, armed=self.armed)
+        if now - self._last_hb_ms >= self.cfg.heartbeat_ms:
+            self._last_hb_ms = now
+            out.append(GcsHeartbeat())
+        rep = self.report
+        if self.armed:
+            rep.armed_ever = True
+        if self.scheduler.error:
+            return out + self._settle(Ending.ERROR, wall, error=self.scheduler.error)
+        mon = self.monitor
+        if mon.collision is not None:
+            c = mon.collision
+            rep.notes.append(
+                f"collision at t={c.time_ms / 1000:.2f} s, NED ({c.x:.2f}, {c.y:.2f}, {c.z:.2f})"
+            )
+            return out + self._settle(Ending.COLLISION, wall)
+        if rep.armed_ever and not self.armed and self.scheduler.idle:
+            return out + self._settle(Ending.LANDED, wall)
+        assert rep.start_ms is not None
+        if now - rep.start_ms >= self.cfg.timeout_s * 1000:
+            if not rep.armed_ever:
+                why = f"timeout: the vehicle never armed in {self.cfg.timeout_s:g} s of vehicle time"
+                return out + self._settle(Ending.ERROR, wall, error=why)
+            rep.notes.append(f"timeout after {self.cfg.timeout_s:g} s of vehicle time")
+            return out + self._settle(Ending.TIMEOUT, wall)
+        return out
+
+    def _settle(self, ending: Ending, wall: float, *, error: str | None = None) -> list[Outgoing]:
+        rep = self.report
+        rep.ending = ending
+        rep.error = error or rep.error
+        self._snapshot()
+        log.info(
+            "flight ends at vehicle time %.2f s: %s%s",
+            self.now_ms / 1000,
+            ending,
+            f" ({error})" if error else "",
+        )
+        self.stage = Stage.SETTLE
+        self._settle_tries = 0
+        if not self.armed and ending is Ending.LANDED:
+            return self._end_settle(wall)
+        return self._send_disarm(wall)
+
+    def _snapshot(self) -> None:
+        rep, mon = self.report, self.monitor
+        rep.end_ms = self.now_ms
+        rep.airborne = mon.airborne
+        rep.min_distance = mon.min_distance
+        rep.collision = mon.collision
+        rep.geofence_violation = mon.geofence_violation
+        rep.notes.extend(self.scheduler.notes)
+
+    def _send_disarm(self, wall: float) -> list[Outgoing]:
+        self._settle_tries += 1
+        self._deadline = wall + self.cfg.retry_s
+        return [disarm_command(force=True)]
+
+    def _settle_tick(self, wall: float) -> list[Outgoing]:
+        if not self.armed and self._settle_tries:
+            return self._end_settle(wall)
+        if wall < self._deadline:
+            return []
+        if self._settle_tries >= self.cfg.settle_s / self.cfg.retry_s:
+            self.report.notes.append("the vehicle did not confirm the disarm")
+            return self._end_settle(wall)
+        return self._send_disarm(wall)
+
+    def _end_settle(self, wall: float) -> list[Outgoing]:
+        out: list[Outgoing] = []
+        if self.lockstep and self._waiting_at is not None:
+            out.append(self._grant())  # one more step, so the simulator acts on the disarm and closes its log
+        if self.cfg.download_log and self.report.ending is not Ending.ERROR:
+            self.stage = Stage.LOG
+            out += self.downloader.start(wall)
+        else:
+            self.stage = Stage.DONE
+        return out
+
+    def _fail(self, reason: str) -> list[Outgoing]:
+        """A bench fault before or outside the flight: stop here."""
+        rep = self.report
+        rep.ending = Ending.ERROR
+        rep.error = reason
+        if rep.start_ms is not None and rep.end_ms is None:
+            self._snapshot()
+        log.error("%s", reason)
+        self.stage = Stage.DONE
+        return []

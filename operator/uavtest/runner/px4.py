@@ -1,0 +1,154 @@
+"""PX4 and MAVLink conventions the runner relies on, as plain numbers (no pymavlink here).
+
+PX4 packs its flight mode into HEARTBEAT.custom_mode: main mode in bits 16-23, sub mode in bits
+24-31; DO_SET_MODE takes base mode MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, main mode, sub mode.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+from uavtest.spec.models import FlightMode
+
+__all__ = [
+    "AUTO_MODES",
+    "FORCE_DISARM_MAGIC",
+    "MODE_FLAG_CUSTOM_MODE_ENABLED",
+    "PX4_MODES",
+    "AckResult",
+    "Autopilot",
+    "Cmd",
+    "LandedState",
+    "MavType",
+    "MissionResult",
+    "ParamType",
+    "custom_mode",
+    "mode_name",
+    "result_name",
+]
+
+MODE_FLAG_CUSTOM_MODE_ENABLED = 1
+FORCE_DISARM_MAGIC = 21196.0  # ARM_DISARM param2: disarm even in the air
+
+
+class Cmd(IntEnum):
+    """MAV_CMD numbers the runner sends."""
+
+    NAV_WAYPOINT = 16
+    NAV_LOITER_TIME = 19
+    NAV_RETURN_TO_LAUNCH = 20
+    NAV_LAND = 21
+    NAV_TAKEOFF = 22
+    DO_SET_MODE = 176
+    DO_CHANGE_SPEED = 178
+    COMPONENT_ARM_DISARM = 400
+
+
+class AckResult(IntEnum):
+    """MAV_RESULT."""
+
+    ACCEPTED = 0
+    TEMPORARILY_REJECTED = 1
+    DENIED = 2
+    UNSUPPORTED = 3
+    FAILED = 4
+    IN_PROGRESS = 5
+    CANCELLED = 6
+
+
+class MissionResult(IntEnum):
+    """MAV_MISSION_RESULT."""
+
+    ACCEPTED = 0
+    ERROR = 1
+    UNSUPPORTED_FRAME = 2
+    UNSUPPORTED = 3
+    NO_SPACE = 4
+    INVALID = 5
+    INVALID_PARAM1 = 6
+    INVALID_PARAM2 = 7
+    INVALID_PARAM3 = 8
+    INVALID_PARAM4 = 9
+    INVALID_PARAM5_X = 10
+    INVALID_PARAM6_Y = 11
+    INVALID_PARAM7 = 12
+    INVALID_SEQUENCE = 13
+    DENIED = 14
+    OPERATION_CANCELLED = 15
+
+
+class ParamType(IntEnum):
+    """MAV_PARAM_TYPE."""
+
+    UINT8 = 1
+    INT8 = 2
+    UINT16 = 3
+    INT16 = 4
+    UINT32 = 5
+    INT32 = 6
+    UINT64 = 7
+    INT64 = 8
+    REAL32 = 9
+    REAL64 = 10
+
+
+class LandedState(IntEnum):
+    UNDEFINED = 0
+    ON_GROUND = 1
+    IN_AIR = 2
+    TAKEOFF = 3
+    LANDING = 4
+
+
+class Autopilot(IntEnum):
+    GENERIC = 0
+    PX4 = 12
+    INVALID = 8
+
+
+class MavType(IntEnum):
+    GCS = 6
+    ONBOARD_CONTROLLER = 18
+
+
+def result_name(enum: type[IntEnum], value: int) -> str:
+    """``DENIED`` for a known number, else the number."""
+    try:
+        return enum(value).name
+    except ValueError:
+        return str(value)
+
+
+# PX4 main modes: MANUAL 1, ALTCTL 2, POSCTL 3, AUTO 4, ACRO 5, OFFBOARD 6, STABILIZED 7
+# AUTO sub modes: READY 1, TAKEOFF 2, LOITER 3, MISSION 4, RTL 5, LAND 6
+PX4_MODES: dict[FlightMode, tuple[int, int]] = {
+    FlightMode.MANUAL: (1, 0),
+    FlightMode.ALTITUDE: (2, 0),
+    FlightMode.POSITION: (3, 0),
+    FlightMode.MISSION: (4, 4),
+    FlightMode.HOLD: (4, 3),
+    FlightMode.RETURN: (4, 5),
+    FlightMode.LAND: (4, 6),
+    FlightMode.TAKEOFF: (4, 2),
+    FlightMode.OFFBOARD: (6, 0),
+}
+
+#: modes in which the vehicle flies by itself: sticks stop when one of these is selected
+AUTO_MODES = frozenset(
+    {FlightMode.MISSION, FlightMode.HOLD, FlightMode.RETURN, FlightMode.LAND, FlightMode.TAKEOFF}
+)
+
+
+def custom_mode(mode: FlightMode) -> int:
+    """HEARTBEAT.custom_mode of a PX4 flight mode."""
+    main, sub = PX4_MODES[mode]
+    return (main << 16) | (sub << 24)
+
+
+def mode_name(custom: int) -> str:
+    """The FlightMode name of a PX4 custom_mode, or ``main/sub`` numbers when it is another mode."""
+    main, sub = (custom >> 16) & 0xFF, (custom >> 24) & 0xFF
+    for mode, (m, s) in PX4_MODES.items():
+        if (m, s) == (main, sub) or (m != 4 and m == main):
+            return mode.value
+    return f"{main}/{sub}"

@@ -1,0 +1,322 @@
+"""PX4-like multicopter position control: trajectory generation, position/velocity loops, yaw.
+
+What gives PX4 its flight times, modelled after PX4 v1.15's ``mc_pos_control`` and
+``FlightTaskAuto``/``PositionSmoothing``:
+
+- a reference point runs towards the target at up to the cruise speed (``MPC_XY_CRUISE`` or a
+  DO_CHANGE_SPEED override), accelerating at most ``MPC_ACC_HOR`` with jerk ``MPC_JERK_AUTO``
+  and slowing so that it stops at the target;
+- the reference is *time-stretched* when the vehicle lags behind it (PX4's ``MPC_XY_ERR_MAX``):
+  its clock runs at ``1 - error / MPC_XY_ERR_MAX``, which is why PX4 cruises at 3.7-4.4 m/s
+  with MPC_XY_CRUISE 5;
+- position P (``MPC_XY_P``, ``MPC_Z_P``) and velocity PI (``MPC_*_VEL_P_ACC``, ``_I_ACC``)
+  loops turn the reference into an acceleration command, limited by the tilt ``MPC_TILTMAX_AIR``;
+- vertical speeds ``MPC_Z_V_AUTO_UP/DN``, takeoff ``MPC_TKO_SPEED`` after a ``MPC_TKO_RAMP_T``
+  ramp, landing ``MPC_LAND_SPEED`` below ``MPC_LAND_ALT2`` (interpolated up to ``MPC_LAND_ALT1``)
+  and ``MPC_LAND_CRWL`` below ``MPC_LAND_ALT3`` (PX4 SIH has a range finder);
+- yaw towards the target (``MPC_YAW_MODE`` 0) at ``MPC_YAWRAUTO_MAX``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import Enum
+
+from uavtest.sitl.params import ParamStore
+from uavtest.sitl.physics import GRAVITY
+
+__all__ = ["Controller", "Goal", "GoalKind", "Limits", "wrap_pi"]
+
+TKO_RAMP_START = 0.7  # m/s (down): PX4's takeoff ramp start
+Z_I_SCALE = 0.1
+
+
+def wrap_pi(a: float) -> float:
+    while a > math.pi:
+        a -= 2 * math.pi
+    while a < -math.pi:
+        a += 2 * math.pi
+    return a
+
+
+class GoalKind(Enum):
+    IDLE = "idle"  # on the ground, motors at idle (armed) or off
+    TAKEOFF = "takeoff"  # climb to z above x, y
+    POSITION = "position"  # fly to x, y, z
+    LAND = "land"  # descend above x, y until on the ground
+    VELOCITY = "velocity"  # position mode sticks: body velocity, climb rate, yaw rate
+    ALTITUDE = "altitude"  # altitude mode sticks: tilt, climb rate, yaw rate
+    ATTITUDE = "attitude"  # manual/stabilized sticks: tilt, thrust, yaw rate
+
+
+@dataclass(slots=True)
+class Goal:
+    kind: GoalKind = GoalKind.IDLE
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    yaw: float = math.nan  # nan: face the direction of travel (MPC_YAW_MODE 0), else hold
+    speed: float = math.nan  # nan: MPC_XY_CRUISE
+    sticks: tuple[float, float, float, float] = (0.0, 0.0, 0.5, 0.0)  # x fwd, y right, z thrust 0..1, r yaw
+
+
+@dataclass(frozen=True, slots=True)
+class Limits:
+    """The parameters the controller uses, read once per parameter change."""
+
+    cruise: float
+    vel_max: float
+    vel_manual: float
+    acc_hor: float
+    jerk: float
+    z_up: float
+    z_down: float
+    tko_speed: float
+    tko_ramp: float
+    land_speed: float
+    land_alt1: float
+    land_alt2: float
+    land_alt3: float
+    land_crawl: float
+    tilt_max: float
+    man_tilt_max: float
+    man_yaw_max: float
+    xy_p: float
+    z_p: float
+    vxy_p: float
+    vxy_i: float
+    vz_p: float
+    vz_i: float
+    acc_up: float
+    acc_down: float
+    yaw_rate: float
+    yaw_acc: float
+    err_max: float
+    hold_dz: float
+    yaw_mode: int
+
+    @classmethod
+    def of(cls, p: ParamStore) -> Limits:
+        return cls(
+            cruise=p["MPC_XY_CRUISE"], vel_max=p["MPC_XY_VEL_MAX"], vel_manual=p["MPC_VEL_MANUAL"],
+            acc_hor=p["MPC_ACC_HOR"], jerk=p["MPC_JERK_AUTO"], z_up=p["MPC_Z_V_AUTO_UP"],
+            z_down=p["MPC_Z_V_AUTO_DN"], tko_speed=p["MPC_TKO_SPEED"], tko_ramp=p["MPC_TKO_RAMP_T"],
+            land_speed=p["MPC_LAND_SPEED"], land_alt1=p["MPC_LAND_ALT1"], land_alt2=p["MPC_LAND_ALT2"],
+            land_alt3=p["MPC_LAND_ALT3"], land_crawl=p["MPC_LAND_CRWL"],
+            tilt_max=math.radians(p["MPC_TILTMAX_AIR"]), man_tilt_max=math.radians(p["MPC_MAN_TILT_MAX"]),
+            man_yaw_max=math.radians(p["MPC_MAN_Y_MAX"]), xy_p=p["MPC_XY_P"], z_p=p["MPC_Z_P"],
+            vxy_p=p["MPC_XY_VEL_P_ACC"], vxy_i=p["MPC_XY_VEL_I_ACC"], vz_p=p["MPC_Z_VEL_P_ACC"],
+            vz_i=p["MPC_Z_VEL_I_ACC"], acc_up=p["MPC_ACC_UP_MAX"], acc_down=p["MPC_ACC_DOWN_MAX"],
+            yaw_rate=math.radians(p["MPC_YAWRAUTO_MAX"]), yaw_acc=math.radians(p["MPC_YAWRAUTO_ACC"]),
+            err_max=max(p["MPC_XY_ERR_MAX"], 0.1), hold_dz=p["MPC_HOLD_DZ"], yaw_mode=int(p["MPC_YAW_MODE"]),
+        )
+
+
+class Controller:
+    """Turns a Goal and the estimated state into acceleration (NED, net of gravity) and yaw-rate commands."""
+
+    def __init__(self, limits: Limits, yaw_rate_scale: float = 1.0) -> None:
+        self.lim = limits
+        self.yaw_rate_scale = yaw_rate_scale
+        self.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        self.ramp = 0.0  # seconds into the takeoff ramp
+
+    def reset(self, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float) -> None:
+        """Restart the reference at the vehicle's state (mode switch, arming)."""
+        self.px, self.py, self.pz = x, y, z
+        self.vx, self.vy, self.vz = vx, vy, vz
+        self.ax = self.ay = 0.0
+        self.ix = self.iy = self.iz = 0.0
+        self.yaw_sp = yaw
+        self.yawrate_sp = 0.0
+        self.ramp = 0.0
+        self.stretch = 1.0
+
+    # ------------------------------------------------------------------ horizontal reference
+
+    def _xy_reference(self, dt: float, tx: float, ty: float, speed: float, x: float, y: float) -> None:
+        lim = self.lim
+        v = math.hypot(self.vx, self.vy)
+        lag = ((self.px - x) * self.vx + (self.py - y) * self.vy) / v if v > 1e-3 else 0.0
+        stretch = 1.0 - lag / lim.err_max if lag > 0.0 else 1.0
+        self.stretch = stretch = stretch if stretch > 0.0 else 0.0
+        dts = dt * stretch
+        ex, ey = tx - self.px, ty - self.py
+        dist = math.hypot(ex, ey)
+        brake = lim.acc_hor / 3.0
+        vmax = min(speed, math.sqrt(2.0 * brake * dist))
+        if dist > 1e-6:
+            vdx, vdy = ex / dist * vmax, ey / dist * vmax
+        else:
+            vdx = vdy = 0.0
+        self._accelerate(dts, vdx, vdy)
+        self.px += self.vx * dts
+        self.py += self.vy * dts
+        if dist < 0.02 and self.vx * self.vx + self.vy * self.vy < 0.01:
+            self.px, self.py, self.vx, self.vy, self.ax, self.ay = tx, ty, 0.0, 0.0, 0.0, 0.0
+
+    def _accelerate(self, dts: float, vdx: float, vdy: float) -> None:
+        lim = self.lim
+        adx, ady = (vdx - self.vx) * 2.0, (vdy - self.vy) * 2.0
+        a = math.hypot(adx, ady)
+        if a > lim.acc_hor:
+            adx, ady = adx * lim.acc_hor / a, ady * lim.acc_hor / a
+        dj = lim.jerk * dts
+        self.ax += max(-dj, min(dj, adx - self.ax))
+        self.ay += max(-dj, min(dj, ady - self.ay))
+        self.vx += self.ax * dts
+        self.vy += self.ay * dts
+
+    # ------------------------------------------------------------------ loops
+
+    def _xy_loops(self, dt: float, x: float, y: float, vx: float, vy: float) -> tuple[float, float]:
+        lim = self.lim
+        vcx = self.vx * self.stretch + lim.xy_p * (self.px - x)
+        vcy = self.vy * self.stretch + lim.xy_p * (self.py - y)
+        evx, evy = vcx - vx, vcy - vy
+        self.ix = max(-3.0, min(3.0, self.ix + lim.vxy_i * evx * dt))
+        self.iy = max(-3.0, min(3.0, self.iy + lim.vxy_i * evy * dt))
+        return lim.vxy_p * evx + self.ix + self.ax, lim.vxy_p * evy + self.iy + self.ay
+
+    def _z_loops(self, dt: float, z: float, vz: float, position: bool) -> float:
+        lim = self.lim
+        vzc = self.vz + (lim.z_p * (self.pz - z) if position else 0.0)
+        e = vzc - vz
+        # PX4 SIH climbs at ~90 % of the setpoint for seconds: a slow thrust integrator
+        self.iz = max(-4.0, min(4.0, self.iz + Z_I_SCALE * lim.vz_i * e * dt))
+        return lim.vz_p * e + self.iz
+
+    def _z_reference(self, dt: float, tz: float) -> None:
+        lim = self.lim
+        dz = tz - self.pz
+        vmax = lim.z_down if dz > 0 else lim.z_up
+        vd = math.copysign(min(vmax, math.sqrt(2.0 * 1.0 * abs(dz))), dz)
+        acc = lim.acc_down if vd > self.vz else lim.acc_up
+        step = acc * 0.5 * dt
+        self.vz += max(-step, min(step, vd - self.vz))
+        self.pz += self.vz * dt
+        if abs(dz) < 0.01 and abs(self.vz) < 0.05:
+            self.pz, self.vz = tz, 0.0
+
+    def _yaw(self, dt: float, yaw: float, target: float) -> float:
+        lim = self.lim
+        if not math.isnan(target):
+            self.yaw_sp = target
+        err = wrap_pi(self.yaw_sp - yaw)
+        rmax = lim.yaw_rate * self.yaw_rate_scale
+        want = max(-rmax, min(rmax, 2.5 * err))
+        step = lim.yaw_acc * dt
+        self.yawrate_sp += max(-step, min(step, want - self.yawrate_sp))
+        return self.yawrate_sp
+
+    def _limit_tilt(self, ax: float, ay: float, tilt: float) -> tuple[float, float]:
+        amax = GRAVITY * math.tan(tilt)
+        a = math.hypot(ax, ay)
+        if a > amax:
+            return ax * amax / a, ay * amax / a
+        return ax, ay
+
+    # ------------------------------------------------------------------ one tick
+
+    def update(
+        self, dt: float, goal: Goal, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float
+    ) -> tuple[float, float, float, float]:
+        """(ax, ay, az, yawrate) commands for one controller tick."""
+        lim = self.lim
+        kind = goal.kind
+        if kind is GoalKind.IDLE:
+            self.reset(x, y, z, 0.0, 0.0, 0.0, yaw)
+            return 0.0, 0.0, GRAVITY, 0.0
+        if kind is GoalKind.POSITION:
+            speed = goal.speed if goal.speed == goal.speed else lim.cruise
+            self._xy_reference(dt, goal.x, goal.y, min(speed, lim.vel_max), x, y)
+            self._z_reference(dt, goal.z)
+            target_yaw = goal.yaw
+            if math.isnan(target_yaw) and lim.yaw_mode == 0:
+                d = math.hypot(goal.x - x, goal.y - y)
+                if d > 1.0:
+                    target_yaw = math.atan2(goal.y - y, goal.x - x)
+            ax, ay = self._xy_loops(dt, x, y, vx, vy)
+            az = self._z_loops(dt, z, vz, True)
+        elif kind is GoalKind.TAKEOFF:
+            self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y)
+            self.ramp += dt
+            climb = min(lim.tko_speed, lim.z_up)
+            dz = goal.z - z
+            vd = -min(climb, math.sqrt(2.0 * 0.6 * max(-dz, 0.0)))
+            # PX4's takeoff ramp: the climb-rate setpoint starts below hover (+0.7 m/s down) and
+            # falls at MPC_TKO_SPEED / MPC_TKO_RAMP_T until it reaches the takeoff speed
+            ramped = TKO_RAMP_START - climb / max(lim.tko_ramp, 1e-3) * self.ramp
+            self.vz = max(ramped, vd)
+            self.pz = z
+            target_yaw = goal.yaw
+            ax, ay = self._xy_loops(dt, x, y, vx, vy)
+            az = self._z_loops(dt, z, vz, False)
+        elif kind is GoalKind.LAND:
+            self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y)
+            h = -z
+            if h > lim.land_alt1:
+                v = lim.z_down
+            elif h > lim.land_alt2:
+                f = (h - lim.land_alt2) / max(lim.land_alt1 - lim.land_alt2, 1e-3)
+                v = lim.land_speed + (lim.z_down - lim.land_speed) * f
+            elif h > lim.land_alt3:
+                v = lim.land_speed
+            else:
+                v = min(lim.land_crawl, lim.land_speed)
+            step = lim.acc_down * dt
+            self.vz += max(-step, min(step, v - self.vz))
+            self.pz = z
+            target_yaw = goal.yaw
+            ax, ay = self._xy_loops(dt, x, y, vx, vy)
+            az = self._z_loops(dt, z, vz, False)
+        else:
+            return self._manual(dt, goal, x, y, z, vx, vy, vz, yaw)
+        ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
+        az = max(-GRAVITY, min(0.8 * GRAVITY, az))
+        return ax, ay, az, self._yaw(dt, yaw, target_yaw)
+
+    def _manual(
+        self, dt: float, goal: Goal, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float
+    ) -> tuple[float, float, float, float]:
+        lim = self.lim
+        sx, sy, sz, sr = goal.sticks
+        dz = lim.hold_dz
+        sx = 0.0 if abs(sx) < dz else sx
+        sy = 0.0 if abs(sy) < dz else sy
+        sr = 0.0 if abs(sr) < dz else sr
+        climb = (sz - 0.5) * 2.0
+        climb = 0.0 if abs(climb) < dz else climb
+        c, s = math.cos(yaw), math.sin(yaw)
+        self.yaw_sp = yaw
+        self.yawrate_sp = sr * lim.man_yaw_max
+        if goal.kind is GoalKind.ATTITUDE:
+            bx, by = GRAVITY * math.tan(sx * lim.man_tilt_max), GRAVITY * math.tan(sy * lim.man_tilt_max)
+            az = -(sz / 0.5 - 1.0) * GRAVITY
+            self.reset(x, y, z, vx, vy, vz, yaw)
+            return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(GRAVITY, az)), self.yawrate_sp
+        # climb rate (altitude and position mode)
+        self.vz = -climb * (lim.z_up if climb > 0 else lim.z_down)
+        if climb == 0.0 and abs(vz) < 0.3 and abs(self.pz - z) > 1.0:
+            self.pz = z
+        position_hold = climb == 0.0
+        if not position_hold:
+            self.pz = z
+        az = self._z_loops(dt, z, vz, position_hold)
+        if goal.kind is GoalKind.ALTITUDE:
+            bx, by = GRAVITY * math.tan(sx * lim.man_tilt_max), GRAVITY * math.tan(sy * lim.man_tilt_max)
+            self.px, self.py, self.vx, self.vy = x, y, vx, vy
+            return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(0.8 * GRAVITY, az)), self.yawrate_sp
+        # position mode: sticks are a body-frame velocity
+        bvx, bvy = sx * lim.vel_manual, sy * lim.vel_manual
+        self.stretch = 1.0
+        self._accelerate(dt, c * bvx - s * bvy, s * bvx + c * bvy)
+        if sx == 0.0 and sy == 0.0:
+            self.px += self.vx * dt
+            self.py += self.vy * dt
+        else:
+            self.px, self.py = x + self.vx * 0.2, y + self.vy * 0.2
+        ax, ay = self._xy_loops(dt, x, y, vx, vy)
+        ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
+        return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), self.yawrate_sp

@@ -1,0 +1,232 @@
+"""The ``uavtest sitl`` process: UDP links, the clock (lockstep or speed factor), signals, log files.
+
+This is the I/O edge around the pure ``Vehicle``:
+
+- two MAVLink links like PX4 SITL's: the API link sends from local port ``api_port + 40``
+  (14580) to ``host:api_port`` (14540), the GCS link from 18570 to ``host:gcs_port`` (14550).
+  Each link answers wherever its client's packets come from. The GCS link sends only
+  heartbeats and status texts until a ground station has spoken on it.
+- lockstep (``--lockstep``): the vehicle clock moves only when a client grants time. The sim
+  announces ``NAMED_VALUE_INT(time_boot_ms=T, name="LOCKSTEP", value=T)`` once everything due
+  at T is sent; a grant is ``NAMED_VALUE_INT(name="LOCKSTEP", value=T_until)``; messages that
+  arrive before a grant are handled first, in order. While waiting, protocols are answered and
+  the announce (with a heartbeat) is repeated every ``REANNOUNCE_S`` of wall time.
+- free-running (default): the vehicle clock runs at ``speed_factor`` times the wall clock.
+- logs: ``<log_dir>/seed<S>-<n>.ulg`` (``.ulg.part`` while open); SIGTERM/SIGINT close the log
+  cleanly and end the process with exit code 0.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import select
+import signal
+import socket
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import FrameType
+
+from uavtest.errors import BadInput, InfrastructureError
+from uavtest.sitl.mav import Msg
+from uavtest.sitl.mavlink_io import Codec
+from uavtest.sitl.ulog_writer import ULogFile
+from uavtest.sitl.vehicle import STEP_US, SimConfig, Vehicle
+
+__all__ = ["FileLogSink", "LOCKSTEP_NAME", "run_sitl"]
+
+log = logging.getLogger(__name__)
+
+LOCKSTEP_NAME = "LOCKSTEP"
+REANNOUNCE_S = 0.2
+_ALWAYS = frozenset({"HEARTBEAT", "STATUSTEXT", "NAMED_VALUE_INT"})
+
+
+class FileLogSink:
+    """Writes each log to ``<dir>/seed<S>-<n>.ulg`` through a ``.part`` file."""
+
+    def __init__(self, directory: Path, seed: int) -> None:
+        self.directory = directory
+        self.seed = seed
+        self.count = 0
+        self._file: ULogFile | None = None
+        self.closed: list[Path] = []
+
+    def open(self, header: bytes) -> None:
+        self.count += 1
+        path = self.directory / f"seed{self.seed}-{self.count}.ulg"
+        self._file = ULogFile(path, header)
+
+    def write(self, chunk: bytes) -> None:
+        if self._file is not None:
+            self._file.write(chunk)
+
+    def close(self) -> None:
+        if self._file is not None:
+            self.closed.append(self._file.close())
+            log.info("flight log %s closed", self.closed[-1])
+            self._file = None
+
+
+@dataclass
+class Link:
+    name: str
+    sock: socket.socket
+    dest: tuple[str, int]
+    codec: Codec = field(default_factory=Codec)
+    peer_seen: bool = False
+    always_stream: bool = True
+
+    def send(self, msg: Msg) -> None:
+        if not (self.always_stream or self.peer_seen or msg.name in _ALWAYS):
+            return
+        try:
+            self.sock.sendto(self.codec.encode(msg), self.dest)
+        except OSError:  # nobody listening (ICMP refused), buffer full: UDP may drop
+            pass
+
+
+def load_config(test: Path | None, seed: int) -> SimConfig:
+    """The simulator's world and boot parameters from a test file (native, manifest or Aerialist)."""
+    if test is None:
+        return SimConfig(seed=seed)
+    try:
+        from uavtest.spec.loaders import load_test
+    except ImportError:  # the spec loaders are not there yet: native UavTest YAML only
+        import yaml
+
+        from uavtest.spec.models import UavTest
+
+        try:
+            doc = yaml.safe_load(test.read_text())
+        except FileNotFoundError:
+            raise BadInput("test file not found", file=str(test)) from None
+        uav = UavTest.model_validate(doc)
+    else:
+        uav = load_test(test)
+    return SimConfig.from_spec(uav.spec, seed)
+
+
+def _bind(host: str, port: int) -> socket.socket:
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    bind_host = host if host.startswith("127.") or host == "localhost" else "0.0.0.0"
+    try:
+        sock.bind((bind_host, port))
+    except OSError as e:
+        sock.close()
+        raise InfrastructureError(f"cannot bind UDP port {port} on {bind_host}: {e}") from e
+    sock.setblocking(False)
+    return sock
+
+
+class _Stop:
+    def __init__(self) -> None:
+        self.requested = False
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        self.requested = True
+
+
+def run_sitl(
+    test: Path | None,
+    *,
+    seed: int = 0,
+    host: str = "127.0.0.1",
+    api_port: int = 14540,
+    gcs_port: int = 14550,
+    api_local_port: int | None = None,
+    gcs_local_port: int = 18570,
+    log_dir: Path = Path("log"),
+    lockstep: bool = False,
+    speed_factor: float = 1.0,
+    max_wall_s: float | None = None,
+) -> int:
+    """Run the simulator until SIGTERM/SIGINT (or ``max_wall_s``); returns the exit code (0)."""
+    if speed_factor <= 0:
+        raise BadInput("the speed factor must be > 0", field="--speed-factor", value=speed_factor)
+    config = load_config(test, seed)
+    sink = FileLogSink(log_dir, seed)
+    vehicle = Vehicle(config, sink)
+    local_api = api_port + 40 if api_local_port is None else api_local_port
+    links = [
+        Link("api", _bind(host, local_api), (host, api_port)),
+        Link("gcs", _bind(host, gcs_local_port), (host, gcs_port), always_stream=False),
+    ]
+    by_fd = {link.sock.fileno(): link for link in links}
+    stop = _Stop()
+    previous = {s: signal.signal(s, stop) for s in (signal.SIGTERM, signal.SIGINT)}
+    log.info(
+        "uavtest sitl: pid %d seed %d, API %s:%d -> %s:%d, GCS %d -> %d, %s",
+        os.getpid(), seed, host, local_api, host, api_port, gcs_local_port, gcs_port,
+        "lockstep" if lockstep else f"speed factor {speed_factor:g}",
+    )
+
+    def broadcast(msgs: list[Msg]) -> None:
+        for msg in msgs:
+            for link in links:
+                link.send(msg)
+
+    def announce() -> None:
+        t_ms = vehicle.time_us // 1000
+        broadcast([Msg("NAMED_VALUE_INT", {"time_boot_ms": t_ms, "name": LOCKSTEP_NAME, "value": t_ms})])
+
+    def handle(link: Link, data: bytes, addr: tuple[str, int]) -> bool:
+        """Handle one datagram; True when it held a lockstep grant that advanced the clock."""
+        link.dest = addr
+        link.peer_seen = True
+        granted = False
+        for msg in link.codec.decode(data):
+            if msg.name == "NAMED_VALUE_INT" and str(msg.get("name", "")).rstrip("\x00") == LOCKSTEP_NAME:
+                until_us = int(msg.get("value", 0)) * 1000
+                if lockstep and until_us > vehicle.time_us:
+                    broadcast(vehicle.advance(until_us))
+                    granted = True
+                continue
+            for reply in vehicle.receive(msg):
+                link.send(reply)
+            broadcast(vehicle.drain())
+        return granted
+
+    wall0 = time.monotonic()
+    sim0 = vehicle.time_us
+    broadcast(vehicle.drain())
+    if lockstep:
+        announce()
+    last_announce = time.monotonic()
+    try:
+        while not stop.requested:
+            now = time.monotonic()
+            if max_wall_s is not None and now - wall0 > max_wall_s:
+                break
+            if lockstep:
+                timeout = max(0.0, REANNOUNCE_S - (now - last_announce))
+            else:
+                target = sim0 + int((now - wall0) * speed_factor * 1e6)
+                if target >= vehicle.time_us + STEP_US:
+                    broadcast(vehicle.advance(target))
+                timeout = max(0.0005, STEP_US * 5 / 1e6 / speed_factor)
+            ready, _, _ = select.select(list(by_fd), [], [], timeout)
+            granted = False
+            for fd in ready:
+                link = by_fd[fd]
+                while True:
+                    try:
+                        data, addr = link.sock.recvfrom(65535)
+                    except (BlockingIOError, InterruptedError):
+                        break
+                    except OSError:  # ICMP port unreachable from an earlier send
+                        continue
+                    granted |= handle(link, data, addr)
+            if lockstep and (granted or time.monotonic() - last_announce >= REANNOUNCE_S):
+                if not granted:
+                    broadcast([vehicle.heartbeat()])
+                announce()
+                last_announce = time.monotonic()
+    finally:
+        vehicle.recorder.stop()
+        for link in links:
+            link.sock.close()
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+    return 0

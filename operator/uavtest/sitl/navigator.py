@@ -1,0 +1,369 @@
+"""What the vehicle should do now: PX4's navigator for mission, hold, takeoff, land and return.
+
+Pure logic: fed the estimated state and the clock, it returns the controller's ``Goal`` and
+queues events (mission item reached, mission finished, status texts). PX4 behaviour kept:
+
+- takeoff to ``max(item altitude, MIS_TAKEOFF_ALT)``, done within ``NAV_MC_ALT_RAD``;
+- a waypoint is reached within its acceptance radius (``NAV_ACC_RAD`` unless the item sets one)
+  and ``NAV_MC_ALT_RAD``; with ``MPC_YAW_MODE`` 0 the vehicle then turns towards the next
+  waypoint and waits until the heading error is below ``MIS_YAW_ERR`` (or ``MIS_YAW_TMT``
+  passes) before the item counts as reached; then it holds ``param1`` seconds;
+- a land item first flies to its position at the current altitude (reached then, as PX4
+  reports it), then descends; the mission is finished once landed;
+- DO_CHANGE_SPEED sets the cruise speed; camera items are skipped;
+- return: climb to ``RTL_RETURN_ALT`` (unless within ``RTL_MIN_DIST``), fly home, descend to
+  ``RTL_DESCEND_ALT``, wait ``RTL_LAND_DELAY`` (negative: forever), land.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import dataclass, field
+from enum import Enum
+
+from uavtest.sitl.controller import Goal, GoalKind, wrap_pi
+from uavtest.sitl.geo import Projection
+from uavtest.sitl.mav import MavCmd, MavSeverity
+from uavtest.sitl.mission import NavItem, has_position
+from uavtest.sitl.modes import NavState
+from uavtest.sitl.params import ParamStore
+
+__all__ = ["Event", "EventKind", "Navigator", "State"]
+
+
+SETTLE_OFFSET_MAX = 2.0  # m
+SETTLE_TAU = 3.0  # s
+
+
+class EventKind(Enum):
+    REACHED = "reached"  # value: seq
+    CURRENT = "current"  # value: seq
+    FINISHED = "finished"
+    TEXT = "text"  # value: (severity, text)
+    HOLD = "hold"  # the navigator asks the commander to switch to hold (after takeoff)
+
+
+@dataclass(frozen=True, slots=True)
+class Event:
+    kind: EventKind
+    value: object = None
+
+
+@dataclass(slots=True)
+class State:
+    """The estimated state the navigator decides on."""
+
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    yaw: float = 0.0
+    landed: bool = True
+
+
+class Phase(Enum):
+    START = "start"
+    TAKEOFF = "takeoff"
+    FLY = "fly"
+    YAW = "yaw"
+    HOLD = "hold"
+    DESCEND = "descend"
+    DONE = "done"
+
+
+@dataclass(slots=True)
+class _Rtl:
+    phase: str = "climb"
+    alt: float = 0.0
+    since: float = 0.0
+
+
+@dataclass(slots=True)
+class _Step:
+    """Where the current item is: its target, its phase, and when the phase began."""
+
+    phase: Phase = Phase.START
+    since: float = 0.0
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    yaw: float = math.nan
+    rtl: _Rtl | None = None
+    extra: dict[str, float] = field(default_factory=dict)
+
+
+class Navigator:
+    def __init__(
+        self, params: ParamStore, projection: Projection, home_alt: float, rng: random.Random | None = None
+    ) -> None:
+        self.rng = rng or random.Random(0)
+        self.params = params
+        self.proj = projection
+        self.home_alt = home_alt
+        self.mission: list[NavItem] = []
+        self.current = 0
+        self.reached = -1
+        self.finished = False
+        self.speed = math.nan  # DO_CHANGE_SPEED override
+        self.events: list[Event] = []
+        self.nav_state = NavState.AUTO_LOITER
+        self.home = (0.0, 0.0, 0.0)
+        self._step = _Step()
+        self._goal = Goal()
+
+    # ------------------------------------------------------------------ configuration
+
+    def set_mission(self, items: list[NavItem]) -> None:
+        self.mission = list(items)
+        self.current = 0
+        self.reached = -1
+        self.finished = False
+        self._step = _Step()
+        self.events.append(Event(EventKind.CURRENT, 0))
+
+    def set_current(self, seq: int) -> None:
+        self.current = max(0, min(seq, max(len(self.mission) - 1, 0)))
+        self.finished = False
+        self._step = _Step()
+        self.events.append(Event(EventKind.CURRENT, self.current))
+
+    def enter(self, nav_state: NavState, st: State, now: float, *, target_alt: float | None = None) -> None:
+        """Start flying a mode from the current state."""
+        self.nav_state = nav_state
+        self._step = _Step(since=now, x=st.x, y=st.y, z=st.z, yaw=st.yaw)
+        if nav_state == NavState.AUTO_TAKEOFF:
+            alt = target_alt if target_alt is not None else self.params["MIS_TAKEOFF_ALT"]
+            self._step.z = -max(alt, self.params["MIS_TAKEOFF_ALT"])
+        elif nav_state == NavState.AUTO_RTL:
+            self._step.rtl = self._rtl_start(st, now)
+        elif nav_state == NavState.AUTO_MISSION and self.finished:
+            self._step.phase = Phase.DONE
+
+    # ------------------------------------------------------------------ the tick
+
+    def update(self, st: State, now: float) -> Goal:
+        ns = self.nav_state
+        if ns == NavState.AUTO_MISSION:
+            return self._mission(st, now)
+        s = self._step
+        if ns == NavState.AUTO_TAKEOFF:
+            if st.landed or abs(st.z - s.z) > self.params["NAV_MC_ALT_RAD"]:
+                return self._goal_set(GoalKind.TAKEOFF, s.x, s.y, s.z, s.yaw)
+            self.events.append(Event(EventKind.HOLD))
+            return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
+        if ns == NavState.AUTO_LAND:
+            return self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
+        if ns == NavState.AUTO_RTL:
+            assert s.rtl is not None
+            return self._rtl(s.rtl, st, now)
+        if st.landed:
+            return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
+        return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)  # hold
+
+    def _goal_set(
+        self, kind: GoalKind, x: float, y: float, z: float, yaw: float = math.nan
+    ) -> Goal:
+        g = self._goal
+        g.kind, g.x, g.y, g.z, g.yaw, g.speed = kind, x, y, z, yaw, self.speed
+        return g
+
+    # ------------------------------------------------------------------ mission
+
+    def _local(self, item: NavItem, st: State) -> tuple[float, float, float]:
+        if item.x == 0 and item.y == 0:
+            x, y = st.x, st.y
+        else:
+            x, y = self.proj.project(item.lat, item.lon)
+        return x, y, -item.alt_rel(self.home_alt)
+
+    def _next_position(self, after: int, st: State) -> tuple[float, float] | None:
+        for item in self.mission[after + 1 :]:
+            if item.command == MavCmd.NAV_RETURN_TO_LAUNCH:
+                return self.home[0], self.home[1]
+            if has_position(item):
+                x, y, _ = self._local(item, st)
+                return x, y
+        return None
+
+    def _advance(self, st: State, now: float, *, report: bool = True) -> None:
+        if report:
+            self.reached = self.current
+            self.events.append(Event(EventKind.REACHED, self.current))
+        if self.current + 1 < len(self.mission):
+            self.current += 1
+            self.events.append(Event(EventKind.CURRENT, self.current))
+            self._step = _Step(since=now)
+        else:
+            self._finish()
+
+    def _finish(self) -> None:
+        if not self.finished:
+            self.finished = True
+            self.events.append(Event(EventKind.FINISHED))
+        self._step.phase = Phase.DONE
+
+    def _mission(self, st: State, now: float) -> Goal:
+        s = self._step
+        if not self.mission or s.phase == Phase.DONE or self.current >= len(self.mission):
+            if self.mission and not self.finished:
+                self._finish()
+            if st.landed:
+                return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
+            if s.phase != Phase.DONE or math.isnan(s.z) or s.z == 0.0:
+                s.phase, s.x, s.y, s.z = Phase.DONE, st.x, st.y, st.z
+            return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
+        item = self.mission[self.current]
+        cmd = item.command
+        p = self.params
+        if s.phase == Phase.START:
+            s.since = now
+            if cmd == MavCmd.DO_CHANGE_SPEED:
+                if item.param2 > 0:
+                    self.speed = item.param2
+                self._advance(st, now)
+                return self._mission(st, now)
+            if cmd == MavCmd.NAV_RETURN_TO_LAUNCH:
+                s.rtl = self._rtl_start(st, now)
+                s.phase = Phase.FLY
+            elif cmd not in (MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_TIME, MavCmd.NAV_LOITER_UNLIM,
+                             MavCmd.NAV_LAND, MavCmd.NAV_TAKEOFF):
+                self._advance(st, now)  # camera and other no-op items
+                return self._mission(st, now)
+            else:
+                s.x, s.y, s.z = self._local(item, st)
+                if cmd == MavCmd.NAV_TAKEOFF:
+                    s.x, s.y = st.x, st.y
+                    s.z = -max(-s.z, p["MIS_TAKEOFF_ALT"])
+                    s.phase = Phase.TAKEOFF
+                    self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, f"Climb to {-s.z:.1f} meters above home")))
+                elif cmd == MavCmd.NAV_LAND:
+                    s.z = st.z
+                    s.phase = Phase.FLY
+                elif st.landed:
+                    s.extra.update(after_takeoff=1.0, tx=st.x, ty=st.y)
+                    s.phase = Phase.TAKEOFF
+                else:
+                    s.phase = Phase.FLY
+        if s.rtl is not None:
+            goal = self._rtl(s.rtl, st, now)
+            if s.rtl.phase == "done":
+                self._advance(st, now, report=False)
+            return goal
+        if s.phase == Phase.TAKEOFF:
+            if "after_takeoff" in s.extra:  # implicit takeoff before the first waypoint
+                target_z = -max(-s.z, p["MIS_TAKEOFF_ALT"])
+                if st.landed or abs(st.z - target_z) > p["NAV_MC_ALT_RAD"]:
+                    return self._goal_set(GoalKind.TAKEOFF, s.extra["tx"], s.extra["ty"], target_z, s.yaw)
+                s.phase = Phase.FLY
+            else:
+                if st.landed or abs(st.z - s.z) > p["NAV_MC_ALT_RAD"]:
+                    return self._goal_set(GoalKind.TAKEOFF, s.x, s.y, s.z, s.yaw)
+                s.yaw = st.yaw
+                self._advance(st, now)
+                return self._mission(st, now)
+        if s.phase == Phase.FLY:
+            radius = p["NAV_ACC_RAD"]
+            if cmd == MavCmd.NAV_WAYPOINT and item.param2 > 0:
+                radius = item.param2
+            dxy = math.hypot(s.x - st.x, s.y - st.y)
+            dz = abs(s.z - st.z)
+            if dxy <= radius and (cmd == MavCmd.NAV_LAND or dz <= p["NAV_MC_ALT_RAD"]):
+                if cmd == MavCmd.NAV_LAND:
+                    self.reached = self.current
+                    self.events.append(Event(EventKind.REACHED, self.current))
+                    s.phase = Phase.DESCEND
+                else:
+                    s.phase = Phase.YAW
+                    s.since = now
+                    nxt = self._next_position(self.current, st)
+                    s.yaw = st.yaw
+                    if nxt is not None and int(p["MPC_YAW_MODE"]) == 0 and math.hypot(nxt[0] - s.x, nxt[1] - s.y) > 0.5:
+                        s.yaw = math.atan2(nxt[1] - s.y, nxt[0] - s.x)
+            else:
+                gx, gy = self._settling(s, st, now)
+                return self._goal_set(GoalKind.POSITION, gx, gy, s.z)
+        if s.phase == Phase.YAW:
+            err = abs(wrap_pi(s.yaw - st.yaw))
+            timeout = p["MIS_YAW_TMT"]
+            if err <= math.radians(p["MIS_YAW_ERR"]) or (timeout > 0 and now - s.since >= timeout):
+                s.phase = Phase.HOLD
+                s.since = now
+            else:
+                return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
+        if s.phase == Phase.HOLD:
+            if cmd == MavCmd.NAV_LOITER_UNLIM:
+                return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
+            hold = item.param1 if cmd in (MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_TIME) else 0.0
+            if now - s.since < hold:
+                return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
+            self._advance(st, now)
+            return self._mission(st, now)
+        if s.phase == Phase.DESCEND:
+            if st.landed:
+                self._finish()
+                return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
+            return self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
+        return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
+
+    def _settling(self, s: _Step, st: State, now: float) -> tuple[float, float]:
+        """The position setpoint while approaching: PX4's setpoint stops short of a waypoint by up
+        to a metre or so (its trajectory lags, SIH logs show 0-1.3 m) and then creeps onto it, which
+        makes its hover before "reached" last 0-8 s. Modelled as a seeded offset towards where the
+        vehicle came from, decaying with ``SETTLE_TAU`` once the vehicle has arrived."""
+        ex = s.extra
+        if "ox" not in ex:
+            dx, dy = s.x - st.x, s.y - st.y
+            d = math.hypot(dx, dy)
+            off = self.rng.uniform(0.0, SETTLE_OFFSET_MAX) if d > 5.0 else 0.0
+            ex["ox"], ex["oy"] = (-dx / d * off, -dy / d * off) if d > 0 else (0.0, 0.0)
+        gx, gy = s.x + ex["ox"], s.y + ex["oy"]
+        if "arrived" not in ex:
+            if math.hypot(gx - st.x, gy - st.y) > 1.0:
+                return gx, gy
+            ex["arrived"] = now
+        f = math.exp(-(now - ex["arrived"]) / SETTLE_TAU)
+        return s.x + ex["ox"] * f, s.y + ex["oy"] * f
+
+    # ------------------------------------------------------------------ return to launch
+
+    def _rtl_start(self, st: State, now: float) -> _Rtl:
+        p = self.params
+        hx, hy, _ = self.home
+        far = math.hypot(st.x - hx, st.y - hy) > p["RTL_MIN_DIST"]
+        alt = max(-st.z, p["RTL_RETURN_ALT"]) if far else -st.z
+        self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, "RTL: start return at %d m" % round(alt))))
+        return _Rtl(phase="climb", alt=alt, since=now)
+
+    def _rtl(self, r: _Rtl, st: State, now: float) -> Goal:
+        p = self.params
+        hx, hy, _ = self.home
+        if r.phase == "climb":
+            if st.landed:
+                r.phase = "done"
+            elif -st.z < r.alt - p["NAV_MC_ALT_RAD"]:
+                return self._goal_set(GoalKind.POSITION, st.x, st.y, -r.alt, st.yaw)
+            else:
+                r.phase = "return"
+        if r.phase == "return":
+            if math.hypot(st.x - hx, st.y - hy) > p["NAV_ACC_RAD"]:
+                return self._goal_set(GoalKind.POSITION, hx, hy, -r.alt)
+            r.phase = "descend"
+        if r.phase == "descend":
+            alt = min(r.alt, p["RTL_DESCEND_ALT"])
+            if -st.z > alt + p["NAV_MC_ALT_RAD"]:
+                return self._goal_set(GoalKind.POSITION, hx, hy, -alt, st.yaw)
+            r.phase, r.since = "loiter", now
+        if r.phase == "loiter":
+            delay = p["RTL_LAND_DELAY"]
+            if delay < 0 or now - r.since < delay:
+                return self._goal_set(GoalKind.POSITION, hx, hy, st.z, st.yaw)
+            r.phase = "land"
+        if r.phase == "land":
+            if st.landed:
+                r.phase = "done"
+                if self.nav_state == NavState.AUTO_MISSION:
+                    self.reached = self.current
+                    self.events.append(Event(EventKind.REACHED, self.current))
+            else:
+                return self._goal_set(GoalKind.LAND, hx, hy, st.z, st.yaw)
+        return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)

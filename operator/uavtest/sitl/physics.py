@@ -1,0 +1,188 @@
+"""The multicopter's body and world: point mass with attitude-limited thrust, drag, wind, boxes.
+
+Plain float arithmetic only: one ``Body.step`` is a few dozen float operations, run at 250 Hz.
+The model: the commanded acceleration (from the position controller) is reached through a
+first-order attitude response (tilt time constant) and limited by the tilt limit; drag is
+linear plus quadratic in the air-relative velocity; wind is a mean plus Ornstein-Uhlenbeck
+gusts (seeded); the ground is z = 0 (NED, Down positive). Obstacles are Aerialist boxes
+(size l, w, h; centre x, y; base z measured up; yaw r degrees). Touching a box is a crash.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from uavtest.spec.models import Obstacle, Wind
+
+__all__ = ["GRAVITY", "Body", "Box", "WindModel", "World"]
+
+GRAVITY = 9.80665
+TAU_TILT = 0.12  # s, horizontal acceleration (attitude) response
+TAU_THRUST = 0.05  # s, vertical thrust response
+DRAG_LINEAR = 0.15  # 1/s
+DRAG_QUADRATIC = 0.06  # 1/m
+DRAG_VERTICAL = 0.8  # 1/s
+LIFTOFF_ACC = 3.0  # m/s^2 of net upward thrust needed to leave the ground (PX4 SIH lifts off late)
+NEAR_MARGIN = 8.0  # m: boxes within this of the vehicle are checked every physics step
+
+
+@dataclass(frozen=True, slots=True)
+class Box:
+    """An obstacle precomputed for fast tests: centre, yaw cos/sin, half sizes, Down limits."""
+
+    index: int
+    cx: float
+    cy: float
+    cos: float
+    sin: float
+    hl: float
+    hw: float
+    z_top: float  # Down coordinate of the top (negative: above ground)
+    z_bottom: float  # Down coordinate of the base
+    radius: float  # horizontal bounding radius
+
+    @classmethod
+    def of(cls, index: int, o: Obstacle) -> Box:
+        r = math.radians(o.position.r)
+        hl, hw = o.size.l / 2, o.size.w / 2
+        return cls(
+            index, o.position.x, o.position.y, math.cos(r), math.sin(r), hl, hw,
+            -(o.position.z + o.size.h), -o.position.z, math.hypot(hl, hw),
+        )
+
+    def contains(self, x: float, y: float, z: float) -> bool:
+        if z < self.z_top or z > self.z_bottom:
+            return False
+        dx, dy = x - self.cx, y - self.cy
+        u = self.cos * dx + self.sin * dy
+        if u > self.hl or u < -self.hl:
+            return False
+        v = -self.sin * dx + self.cos * dy
+        return -self.hw <= v <= self.hw
+
+
+class World:
+    """The boxes, with a cheap 'near' list refreshed at a low rate."""
+
+    def __init__(self, obstacles: Sequence[Obstacle]) -> None:
+        self.boxes = [Box.of(i, o) for i, o in enumerate(obstacles)]
+        self.near: list[Box] = []
+
+    def refresh_near(self, x: float, y: float) -> None:
+        self.near = [
+            b for b in self.boxes if math.hypot(x - b.cx, y - b.cy) <= b.radius + NEAR_MARGIN
+        ]
+
+    def hit(self, x: float, y: float, z: float) -> Box | None:
+        for b in self.near:
+            if b.contains(x, y, z):
+                return b
+        return None
+
+
+class WindModel:
+    """Wind in NED (m/s, the velocity of the air): mean plus OU gusts, never above max speed."""
+
+    TAU = 3.0  # s, gust correlation time
+
+    def __init__(self, wind: Wind, rng: random.Random) -> None:
+        d = math.radians(wind.direction)
+        self.mean = (wind.mean_speed * math.cos(d), wind.mean_speed * math.sin(d))
+        self.max_speed = wind.max_speed if wind.max_speed is not None else wind.mean_speed
+        spread = self.max_speed - wind.mean_speed
+        self.sigma = spread / 2.0 if wind.gusts else 0.0
+        self.gust = [0.0, 0.0, 0.0]
+        self._rng = rng
+        self.n, self.e, self.d = self.mean[0], self.mean[1], 0.0
+
+    def update(self, dt: float) -> None:
+        if self.sigma <= 0:
+            return
+        a = math.exp(-dt / self.TAU)
+        b = self.sigma * math.sqrt(1 - a * a)
+        g = self.gust
+        gauss = self._rng.gauss
+        g[0] = a * g[0] + b * gauss(0.0, 1.0)
+        g[1] = a * g[1] + b * gauss(0.0, 1.0)
+        g[2] = a * g[2] + 0.25 * b * gauss(0.0, 1.0)
+        n, e = self.mean[0] + g[0], self.mean[1] + g[1]
+        speed = math.hypot(n, e)
+        if speed > self.max_speed > 0:
+            n, e = n * self.max_speed / speed, e * self.max_speed / speed
+        self.n, self.e, self.d = n, e, g[2]
+
+
+class Body:
+    """Position, velocity, actual acceleration and yaw of the vehicle (NED, SI units)."""
+
+    __slots__ = (
+        "ax", "ay", "az", "kq", "kl", "motors", "on_ground", "tau_tilt", "vx", "vy", "vz", "x", "y", "yaw",
+        "yawrate", "z",
+    )
+
+    def __init__(self, tau_tilt: float = TAU_TILT, drag_scale: float = 1.0) -> None:
+        self.x = self.y = self.z = 0.0
+        self.vx = self.vy = self.vz = 0.0
+        self.ax = self.ay = self.az = 0.0  # acceleration from thrust (without gravity), NED
+        self.yaw = 0.0
+        self.yawrate = 0.0
+        self.on_ground = True
+        self.motors = False
+        self.tau_tilt = tau_tilt
+        self.kl = DRAG_LINEAR * drag_scale
+        self.kq = DRAG_QUADRATIC * drag_scale
+
+    def step(
+        self, dt: float, cax: float, cay: float, caz: float, cyawrate: float, wn: float, we: float, wd: float
+    ) -> None:
+        """Advance ``dt`` seconds under commanded acceleration (NED, net of gravity) and yaw rate."""
+        if not self.motors:
+            cax = cay = 0.0
+            caz = GRAVITY  # free fall
+            cyawrate = 0.0
+        k = dt / self.tau_tilt
+        self.ax += (cax - self.ax) * k
+        self.ay += (cay - self.ay) * k
+        self.az += (caz - self.az) * (dt / TAU_THRUST)
+        rx, ry, rz = self.vx - wn, self.vy - we, self.vz - wd
+        drag = self.kl + self.kq * math.sqrt(rx * rx + ry * ry)
+        fx = self.ax - drag * rx
+        fy = self.ay - drag * ry
+        fz = self.az - DRAG_VERTICAL * rz
+        if self.on_ground:
+            if fz >= -LIFTOFF_ACC:  # not enough thrust to leave the ground: no motion
+                self.vx = self.vy = self.vz = 0.0
+                self.yawrate = 0.0
+                return
+            self.on_ground = False
+        self.vx += fx * dt
+        self.vy += fy * dt
+        self.vz += fz * dt
+        self.x += self.vx * dt
+        self.y += self.vy * dt
+        self.z += self.vz * dt
+        self.yawrate += (cyawrate - self.yawrate) * (dt / 0.08)
+        self.yaw += self.yawrate * dt
+        if self.yaw > math.pi:
+            self.yaw -= 2 * math.pi
+        elif self.yaw < -math.pi:
+            self.yaw += 2 * math.pi
+        if self.z >= 0.0:
+            self.z = 0.0
+            if self.vz > 0.0:
+                self.vz = 0.0
+            self.vx = self.vy = 0.0
+            self.on_ground = True
+
+    def tilt(self) -> tuple[float, float]:
+        """(roll, pitch) radians that produce the current horizontal acceleration at this yaw."""
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        fwd = c * self.ax + s * self.ay
+        right = -s * self.ax + c * self.ay
+        lift = GRAVITY - self.az
+        if lift <= 0.1:
+            lift = 0.1
+        return math.atan2(right, lift), -math.atan2(fwd, lift)

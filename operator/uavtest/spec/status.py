@@ -1,0 +1,168 @@
+"""The status of a UavTest custom resource: counters, verdicts, artifacts and conditions.
+
+Written only by the operator (through the ``/status`` subresource) and typed in the CRD like
+the spec, so ``kubectl`` and GitOps tools see a documented shape. Kept bounded: the
+per-replica list holds at most ``MAX_STATUS_RESULTS`` entries (failed and error replicas
+first, then passed ones, each by index; ``resultsOmitted`` counts the rest); every replica's
+full result stays in the object store under ``artifacts.store``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from datetime import datetime
+from enum import StrEnum
+
+from pydantic import Field, field_validator
+
+from uavtest.spec.models import Model
+
+__all__ = [
+    "MAX_STATUS_RESULTS",
+    "Artifacts",
+    "Condition",
+    "ConditionReason",
+    "ConditionStatus",
+    "ConditionType",
+    "Phase",
+    "ReplicaStatus",
+    "ReplicaVerdict",
+    "UavTestStatus",
+    "compact_results",
+]
+
+MAX_STATUS_RESULTS = 50
+MAX_REASON_LENGTH = 256
+
+
+class Phase(StrEnum):
+    """A human summary of the conditions (the ``Phase`` printer column)."""
+
+    PENDING = "Pending"  # no replica has started yet
+    RUNNING = "Running"  # some replica is flying or waiting to be retried
+    SUCCEEDED = "Succeeded"  # every replica passed
+    FAILED = "Failed"  # some replica failed an assertion
+    ERROR = "Error"  # only bench errors, no valid replica verdict to report
+
+
+class ReplicaVerdict(StrEnum):
+    """Verdict of one finished replica; the same words as ``uavtest.analysis.models.Verdict``."""
+
+    PASS = "pass"
+    FAIL = "fail"
+    ERROR = "error"
+
+
+class ConditionStatus(StrEnum):
+    TRUE = "True"
+    FALSE = "False"
+    UNKNOWN = "Unknown"
+
+
+class ConditionType(StrEnum):
+    """Condition types GitOps tools and ``kubectl wait --for=condition=...`` can wait on."""
+
+    COMPLETE = "Complete"  # True when every replica has a final verdict (pass, fail or error)
+    SUCCEEDED = "Succeeded"  # True when every replica passed; False once the run ended otherwise
+    FAILED = "Failed"  # True when the run ended with a failing replica or only errors
+    FLAKY = "Flaky"  # True when the valid replicas both passed and failed
+
+
+class ConditionReason(StrEnum):
+    """The documented CamelCase reasons of the conditions above."""
+
+    PENDING = "ReplicasPending"
+    RUNNING = "ReplicasRunning"
+    ALL_PASSED = "AllReplicasPassed"
+    SOME_FAILED = "ReplicasFailed"
+    ONLY_ERRORS = "OnlyBenchErrors"
+    FLAKY = "FlakyReplicas"
+    STABLE = "StableReplicas"
+    AGGREGATION_FAILED = "AggregationFailed"
+    JOB_FAILED = "JobFailed"
+
+
+class Condition(Model):
+    """A ``metav1.Condition``: ``lastTransitionTime`` changes only when ``status`` flips."""
+
+    type: str = Field(pattern=r"^[A-Z][A-Za-z0-9]*$", max_length=316, description="CamelCase condition type")
+    status: ConditionStatus
+    reason: str = Field(
+        pattern=r"^[A-Za-z]([A-Za-z0-9_,:]*[A-Za-z0-9_])?$", max_length=1024, description="CamelCase reason"
+    )
+    message: str = Field("", max_length=32768, description="human readable details")
+    observed_generation: int | None = Field(
+        None, ge=0, description="metadata.generation the condition is about"
+    )
+    last_transition_time: datetime = Field(description="when status last changed")
+
+
+class ReplicaStatus(Model):
+    """One finished replica, in brief; the full result is ``result.json`` in the store."""
+
+    index: int = Field(ge=0)
+    seed: int = Field(ge=0)
+    verdict: ReplicaVerdict = Field(
+        description="pass, fail (an assertion did not hold) or error (the bench failed)"
+    )
+    min_distance: float | None = Field(None, description="smallest 3-D distance to an obstacle, metres")
+    reason: str = Field(
+        "", max_length=MAX_REASON_LENGTH, description="why it failed or errored; empty on pass"
+    )
+
+    @field_validator("reason", mode="before")
+    @classmethod
+    def _cut(cls, value: object) -> object:
+        if isinstance(value, str) and len(value) > MAX_REASON_LENGTH:
+            return value[: MAX_REASON_LENGTH - 1] + "…"
+        return value
+
+
+class Artifacts(Model):
+    """URIs in the object store (``s3://bucket/...`` or ``file:///...``)."""
+
+    store: str | None = Field(None, description="prefix of this run: <namespace>/<test>/<run-id>/")
+    summary: str | None = Field(None, description="aggregate/summary.json")
+    average: str | None = Field(None, description="aggregate/average.csv")
+    plot: str | None = Field(None, description="aggregate/trajectories.png")
+
+
+class UavTestStatus(Model):
+    phase: Phase = Field(Phase.PENDING, description="Pending, Running, Succeeded, Failed or Error")
+    replicas: int = Field(0, ge=0, description="replicas in this run")
+    pending: int = Field(0, ge=0, description="replicas not started yet")
+    running: int = Field(0, ge=0, description="replicas flying (or being retried)")
+    passed: int = Field(0, ge=0)
+    failed: int = Field(0, ge=0)
+    errors: int = Field(0, ge=0, description="replicas that ended in a bench error (not counted as failures)")
+    flakiness: float | None = Field(
+        None, ge=0, le=1, description="failed / valid replicas; unset until a replica has a valid verdict"
+    )
+    flaky: bool = Field(False, description="valid replicas both passed and failed")
+    run_id: str | None = Field(None, description="identifier of the run in the store")
+    start_time: datetime | None = None
+    completion_time: datetime | None = None
+    observed_generation: int | None = Field(
+        None, ge=0, description="metadata.generation this status is about"
+    )
+    message: str | None = Field(None, max_length=4096, description="human summary of the run")
+    artifacts: Artifacts = Field(default_factory=Artifacts)
+    conditions: list[Condition] = Field(default_factory=list, max_length=16)
+    results: list[ReplicaStatus] = Field(
+        default_factory=list,
+        max_length=MAX_STATUS_RESULTS,
+        description=f"at most {MAX_STATUS_RESULTS} finished replicas, failed first; all are in the store",
+    )
+    results_omitted: int = Field(0, ge=0, description="finished replicas left out of results")
+
+
+def compact_results(results: Iterable[ReplicaStatus]) -> tuple[list[ReplicaStatus], int]:
+    """The bounded ``status.results`` list and how many replicas it leaves out.
+
+    Failed replicas come first, then errors, then passes, each by index, so the ones a user
+    wants to look at are always there (``ReplicaStatus`` cuts reasons to ``MAX_REASON_LENGTH``).
+    """
+    order = {ReplicaVerdict.FAIL: 0, ReplicaVerdict.ERROR: 1, ReplicaVerdict.PASS: 2}
+    ranked = sorted(results, key=lambda r: (order[r.verdict], r.index))
+    kept = ranked[:MAX_STATUS_RESULTS]
+    return kept, len(ranked) - len(kept)

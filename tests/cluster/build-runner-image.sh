@@ -1,0 +1,138 @@
+#!/bin/bash
+# build-runner-image.sh REPO_ROOT [OUT.tar] : the runner OCI image "uavtest-runner:dev", without Docker.
+#   layer 1  Debian bookworm rootfs: debootstrap --variant=minbase + python3, python3-venv
+#            (cached under $UAVTEST_CACHE/image, keyed by the package list)
+#   layer 2  a venv /opt/uavtest holding the project's dependencies (wheels for CPython 3.11 manylinux,
+#            fetched with pip on the host; cached, keyed by layer 1 + pyproject's dependency list)
+#   layer 3  the project's wheel, built from REPO_ROOT's working tree (tracked + untracked, not ignored
+#            files) — rebuilt every time; `uavtest` is on PATH (/usr/local/bin/uavtest -> /opt/uavtest/bin)
+# Layers 2 and 3 are made with an overlay mount + chroot, so pip runs with the image's own python.
+# Writes OUT.tar (default $UAVTEST_CACHE/share/uavtest-runner-dev.tar), an OCI archive for
+# `ctr -n k8s.io images import`. Needs root (debootstrap, mount, chroot).
+set -euo pipefail
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+REPO=$(cd "${1:?usage: build-runner-image.sh REPO_ROOT [OUT.tar]}" && pwd)
+OUT=${2:-$SHARE/uavtest-runner-dev.tar}
+[ "$(id -u)" = 0 ] || { log "build-runner-image.sh needs root (debootstrap, mount, chroot)"; exit 1; }
+IMG=$CACHE/image; mkdir -p "$IMG" "$SHARE" "$(dirname "$OUT")"
+exec 9>"$IMG/.lock"; flock 9   # one image build at a time per cache
+
+SUITE=bookworm
+BASE_PACKAGES="python3,python3-venv,ca-certificates"
+BASE_RECIPE=1   # bump when the way the base layer is made changes
+PYVER=3.11      # bookworm's python3
+VENV=/opt/uavtest
+IMAGE_PATH=$VENV/bin:/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
+
+WORK=$(mktemp -d "$IMG/tmp.XXXXXX")
+cleanup() {   # unmount whatever is still mounted under WORK (overlays; debootstrap's proc/sys if it died)
+  grep -F " $WORK/" /proc/self/mountinfo | awk '{print $5}' | sort -r | while read -r m; do umount -l "$m"; done || true
+  rm -rf "$WORK"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+key() { printf '%s\n' "$@" | sha256sum | cut -c1-16; }
+
+# chroot_run ROOT CMD... : run CMD in ROOT with a clean environment (no host PIP_* settings leak in)
+chroot_run() {
+  local root=$1; shift
+  env -i PATH="$IMAGE_PATH" HOME=/root LANG=C.UTF-8 PIP_DISABLE_PIP_VERSION_CHECK=1 chroot "$root" "$@"
+}
+
+# overlay_mount LOWER(S) UPPER WORK MERGED
+overlay_mount() {
+  mkdir -p "$2" "$3" "$4"
+  mount -t overlay overlay -o "lowerdir=$1,upperdir=$2,workdir=$3" "$4"
+}
+overlay_umount() { umount "$1"; }
+
+# ---------------------------------------------------------------- layer 1: debootstrap
+t0=$(now)
+KA=$(key "$SUITE" "$BASE_PACKAGES" "$BASE_RECIPE")
+A=$IMG/base-$KA
+if [ -f "$A/layer.tar" ] && [ -d "$A/rootfs/usr" ]; then
+  log "image layer 1 (debian $SUITE + python3): cached ($(since "$t0")s)"
+else
+  DB=$CACHE/deb/debootstrap
+  if [ ! -x "$DB/x/usr/sbin/debootstrap" ]; then
+    rm -rf "$DB"; mkdir -p "$DB/pkgs" "$DB/x"
+    (cd "$DB/pkgs" && { apt-get download debootstrap >/dev/null 2>&1 || { apt-get update -qq >/dev/null; apt-get download debootstrap >/dev/null; }; })
+    dpkg-deb -x "$DB"/pkgs/debootstrap_*.deb "$DB/x"
+  fi
+  MIRROR=${UAVTEST_DEBIAN_MIRROR:-}
+  if [ -z "$MIRROR" ]; then   # the host's own Debian mirror, else deb.debian.org
+    MIRROR=$(cat /etc/apt/sources.list.d/*.sources 2>/dev/null | awk '/^URIs:/ {print $2}' | grep -v security | head -n1 || true)
+    [ -n "$MIRROR" ] || MIRROR=$(awk '/^deb / && !/security/ {print $2; exit}' /etc/apt/sources.list 2>/dev/null || true)
+    MIRROR=${MIRROR:-http://deb.debian.org/debian}
+  fi
+  KEYRING=/usr/share/keyrings/debian-archive-keyring.gpg
+  GPG=(--keyring="$KEYRING"); [ -f "$KEYRING" ] || GPG=(--no-check-gpg)
+  rm -rf "$A"; mkdir -p "$WORK/base"
+  DEBOOTSTRAP_DIR=$DB/x/usr/share/debootstrap "$DB/x/usr/sbin/debootstrap" --variant=minbase \
+    --include="$BASE_PACKAGES" "${GPG[@]}" "$SUITE" "$WORK/base/rootfs" "$MIRROR" > "$WORK/debootstrap.log" 2>&1 \
+    || { tail -n 30 "$WORK/debootstrap.log" >&2; cat "$WORK/base/rootfs/debootstrap/debootstrap.log" 2>/dev/null | tail -n 30 >&2; exit 1; }
+  R=$WORK/base/rootfs
+  rm -rf "$R"/var/cache/apt/archives/*.deb "$R"/var/lib/apt/lists/* "$R"/usr/share/doc/* "$R"/usr/share/man/* \
+         "$R"/usr/share/info/* "$R"/var/log/*.log "$R"/var/cache/debconf/*-old "$R"/var/lib/dpkg/*-old
+  : > "$R/etc/resolv.conf"
+  echo uavtest-runner > "$R/etc/hostname"
+  python3 "$HERE/mkoci.py" layer --empty dev --empty proc --empty sys --empty run "$R" "$WORK/base/layer.tar" >/dev/null
+  mv "$WORK/base" "$A"
+  log "image layer 1 (debian $SUITE + python3): built in $(since "$t0")s"
+fi
+
+# ---------------------------------------------------------------- layer 2: dependencies in a venv
+t0=$(now)
+REQS=$(python3 - "$REPO/pyproject.toml" <<'EOF'
+import sys, tomllib
+print("\n".join(tomllib.load(open(sys.argv[1], "rb"))["project"]["dependencies"]))
+EOF
+)
+KB=$(key "$KA" "$PYVER" "$REQS")
+B=$IMG/deps-$KB
+if [ -f "$B/layer.tar" ] && [ -d "$B/upper$VENV" ]; then
+  log "image layer 2 (dependencies venv): cached ($(since "$t0")s)"
+else
+  rm -rf "$B"; mkdir -p "$WORK/deps/wheels"
+  echo "$REQS" > "$WORK/deps/wheels/requirements.txt"
+  # binary wheels for the image's interpreter (CPython 3.11, glibc 2.36), whatever the host's python is
+  env -u PIP_FIND_LINKS python3 -m pip download --quiet --disable-pip-version-check --only-binary=:all: \
+    --python-version "$PYVER" --implementation cp --abi "cp${PYVER/./}" --abi abi3 --abi none \
+    --platform manylinux_2_36_x86_64 --platform manylinux_2_28_x86_64 --platform manylinux_2_17_x86_64 \
+    --platform manylinux2014_x86_64 --platform manylinux_2_5_x86_64 --platform manylinux1_x86_64 --platform any \
+    -d "$WORK/deps/wheels" -r "$WORK/deps/wheels/requirements.txt"
+  M=$WORK/deps/merged
+  overlay_mount "$A/rootfs" "$WORK/deps/upper" "$WORK/deps/work" "$M"
+  cp -a "$WORK/deps/wheels" "$M/tmp/wheels"
+  chroot_run "$M" /usr/bin/python3 -m venv "$VENV"
+  chroot_run "$M" "$VENV/bin/pip" install --quiet --no-cache-dir --no-index --find-links /tmp/wheels \
+    -r /tmp/wheels/requirements.txt
+  ln -s "$VENV/bin/uavtest" "$M/usr/local/bin/uavtest"   # dangling until layer 3 installs the project
+  rm -rf "$M/tmp/wheels" "$M/root/.cache"
+  overlay_umount "$M"
+  rm -rf "$WORK/deps/work" "$WORK/deps/wheels"
+  python3 "$HERE/mkoci.py" layer "$WORK/deps/upper" "$WORK/deps/layer.tar" >/dev/null
+  mv "$WORK/deps" "$B"
+  log "image layer 2 (dependencies venv): built in $(since "$t0")s"
+fi
+
+# ---------------------------------------------------------------- layer 3: the project, from the work tree
+t0=$(now)
+mkdir -p "$WORK/proj/src" "$WORK/proj/dist"
+(cd "$REPO" && git ls-files -z --cached --others --exclude-standard | while IFS= read -r -d '' f; do
+   [ -e "$f" ] && printf '%s\0' "$f"; done | tar --null -T - -cf -) | tar -xf - -C "$WORK/proj/src"
+env -u PIP_FIND_LINKS python3 -m pip wheel --quiet --disable-pip-version-check --no-deps \
+  -w "$WORK/proj/dist" "$WORK/proj/src"
+M=$WORK/proj/merged
+overlay_mount "$B/upper:$A/rootfs" "$WORK/proj/upper" "$WORK/proj/work" "$M"
+WHL=$(cd "$WORK/proj/dist" && ls uavtest-*.whl)
+mkdir -p "$M/tmp/dist"; cp "$WORK/proj/dist/$WHL" "$M/tmp/dist/"
+chroot_run "$M" "$VENV/bin/pip" install --quiet --no-cache-dir --no-index --no-deps "/tmp/dist/$WHL"
+rm -rf "$M/tmp/dist" "$M/root/.cache"
+chroot_run "$M" /usr/local/bin/uavtest --help >/dev/null 2>&1 || log "note: 'uavtest --help' fails in the image (CLI not written yet?)"
+overlay_umount "$M"
+python3 "$HERE/mkoci.py" layer "$WORK/proj/upper" "$WORK/proj/layer.tar" >/dev/null
+python3 "$HERE/mkoci.py" image --out "$OUT" --name "$RUNNER_IMAGE_REF" --cmd '["uavtest", "--help"]' \
+  --env "PATH=$IMAGE_PATH" --env "VIRTUAL_ENV=$VENV" --env LANG=C.UTF-8 --env PYTHONUNBUFFERED=1 \
+  "$A/layer.tar" "$B/layer.tar" "$WORK/proj/layer.tar" >/dev/null
+log "image layer 3 (project wheel) + archive: built in $(since "$t0")s -> $OUT ($(du -h "$OUT" | cut -f1))"

@@ -1,0 +1,11 @@
+#!/bin/bash
+# down.sh DIR [--purge] : stop what up.sh DIR started (kwok, scheduler, kcm, apiserver, etcd), by PID file.
+# --purge also removes DIR. For a cluster with a real node run down-real.sh instead (it calls this).
+set -euo pipefail
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+D=${1:?usage: down.sh DIR [--purge]}
+[ -d "$D" ] || exit 0
+D=$(cd "$D" && pwd)
+for n in kopf kwok scheduler kcm apiserver etcd; do stop_pidfile "$D/$n.pid"; done
+if [ "${2:-}" = --purge ]; then rm -rf "$D"; fi
+log "control plane down: $D"

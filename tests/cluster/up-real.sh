@@ -1,0 +1,115 @@
+#!/bin/bash
+# up-real.sh DIR : after `up.sh DIR`, add a REAL node named "localhost": containerd + runc + CNI bridge
+# (Debian packages unpacked by build.sh) and a kubelet. Pods really run; images must be imported first
+# (`ctr -n k8s.io images import`, see import-image.sh) and used with imagePullPolicy: Never.
+# Needs root. One real node per host at a time (kubelet and containerd hard-code a few host paths).
+# Env: UAVTEST_BRIDGE (default uavtest0), UAVTEST_POD_SUBNET (default 10.244.7.0/24).
+# Stop with down-real.sh DIR, which also undoes what kubelet/containerd changed on the host.
+set -euo pipefail
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+D=$(cd "${1:?usage: up-real.sh DIR}" && pwd); load_ports "$D"
+[ -f "$D/kubeconfig" ] && [ -f "$D/apiserver.pid" ] || { log "run up.sh $D first"; exit 1; }
+[ "$(id -u)" = 0 ] || { log "up-real.sh needs root (containerd, runc, mounts, network namespaces)"; exit 1; }
+for f in "$DEBX/usr/bin/containerd" "$DEBX/usr/sbin/runc" "$DEBX/usr/lib/cni/bridge" "$BIN/kubelet" "$SHARE/pause.tar"; do
+  [ -e "$f" ] || { log "missing $f: run build.sh first"; exit 1; }
+done
+BR=${UAVTEST_BRIDGE:-uavtest0}; SUBNET=${UAVTEST_POD_SUBNET:-10.244.7.0/24}
+C=$D/ctr; KL=$D/kubelet
+export PATH=$DEBX/usr/bin:$DEBX/usr/sbin:$PATH   # containerd finds containerd-shim-runc-v2 on PATH
+K() { "$BIN/kubectl" --kubeconfig="$D/kubeconfig" "$@"; }
+t0=$(now)
+fail() { log "$1"; for f in "$D/logs/containerd.log" "$D/logs/kubelet.log"; do echo "--- $f" >&2; tail -n 30 "$f" >&2; done; exit 1; }
+
+# what down-real.sh must restore or leave alone: kubelet tunes these sysctls on start
+{
+  echo "BRIDGE=$BR"
+  for s in vm/overcommit_memory vm/panic_on_oom kernel/panic kernel/panic_on_oops kernel/keys/root_maxkeys \
+           kernel/keys/root_maxbytes; do
+    [ -r "/proc/sys/$s" ] && echo "SYSCTL $s $(cat "/proc/sys/$s")"
+  done
+  for n in /run/netns/*; do [ -e "$n" ] && echo "NETNS $n"; done
+} > "$D/host-state.txt"
+
+mkdir -p "$C/cni" "$C/ipam" "$KL" "$D/logs"
+cat > "$C/config.toml" <<EOF
+version = 2
+root = "$C/root"
+state = "$C/state"
+# opt would create /opt/containerd on the host; the others are snapshotters we do not use
+disabled_plugins = ["io.containerd.internal.v1.opt", "io.containerd.snapshotter.v1.btrfs",
+  "io.containerd.snapshotter.v1.zfs", "io.containerd.snapshotter.v1.devmapper", "io.containerd.snapshotter.v1.aufs",
+  "io.containerd.tracing.processor.v1.otlp"]
+[grpc]
+  address = "$C/containerd.sock"
+[ttrpc]
+  address = "$C/containerd.sock.ttrpc"
+[metrics]
+  address = ""
+[plugins."io.containerd.grpc.v1.cri"]
+  sandbox_image = "$PAUSE_IMAGE"
+  stream_server_address = "127.0.0.1"
+  stream_server_port = "0"
+  # the VM lacks CAP_SYS_RESOURCE for negative oom_score_adj
+  restrict_oom_score_adj = true
+  disable_apparmor = true
+  [plugins."io.containerd.grpc.v1.cri".containerd]
+    snapshotter = "overlayfs"
+    default_runtime_name = "runc"
+    [plugins."io.containerd.grpc.v1.cri".containerd.runtimes.runc]
+      runtime_type = "io.containerd.runc.v2"
+      [plugins."io.containerd.grpc.v1.cri".containerd.runtimes.runc.options]
+        BinaryName = "$DEBX/usr/sbin/runc"
+        Root = "$C/runc-root"
+        SystemdCgroup = false
+  [plugins."io.containerd.grpc.v1.cri".cni]
+    bin_dir = "$DEBX/usr/lib/cni"
+    conf_dir = "$C/cni"
+EOF
+cat > "$C/cni/10-uavtest.conflist" <<EOF
+{"cniVersion": "1.0.0", "name": "uavtest",
+ "plugins": [
+  {"type": "bridge", "bridge": "$BR", "isGateway": false, "ipMasq": false, "hairpinMode": false,
+   "ipam": {"type": "host-local", "dataDir": "$C/ipam", "ranges": [[{"subnet": "$SUBNET"}]]}},
+  {"type": "loopback"}]}
+EOF
+cat > "$KL/config.yaml" <<EOF
+apiVersion: kubelet.config.k8s.io/v1beta1
+kind: KubeletConfiguration
+address: 127.0.0.1
+port: $KUBELET_PORT
+readOnlyPort: 0
+healthzBindAddress: 127.0.0.1
+healthzPort: $KUBELET_HEALTHZ_PORT
+containerRuntimeEndpoint: unix://$C/containerd.sock
+cgroupDriver: cgroupfs
+failCgroupV1: false
+failSwapOn: false
+cgroupsPerQOS: false
+enforceNodeAllocatable: []
+podLogsDir: $KL/pod-logs
+volumePluginDir: $KL/volume-plugins
+authentication:
+  anonymous: {enabled: false}
+  webhook: {enabled: false}
+  x509: {clientCAFile: $D/pki/ca.crt}
+authorization: {mode: AlwaysAllow}
+serializeImagePulls: false
+imageGCHighThresholdPercent: 100
+imageGCLowThresholdPercent: 99
+evictionHard: {memory.available: "100Mi", nodefs.available: "1%", imagefs.available: "1%"}
+registerNode: true
+resolvConf: ""
+EOF
+
+"$DEBX/usr/bin/containerd" --config "$C/config.toml" </dev/null >"$D/logs/containerd.log" 2>&1 &
+echo $! > "$D/containerd.pid"
+CTR=("$DEBX/usr/bin/ctr" --address "$C/containerd.sock" -n k8s.io)
+wait_for 30 "${CTR[@]}" version || fail "containerd did not answer in 30 s"
+"${CTR[@]}" images import "$SHARE/pause.tar" >/dev/null
+
+"$BIN/kubelet" --config="$KL/config.yaml" --kubeconfig="$D/kubeconfig" --root-dir="$KL/root" \
+  --cert-dir="$KL/pki" --hostname-override=localhost </dev/null >"$D/logs/kubelet.log" 2>&1 &
+echo $! > "$D/kubelet.pid"
+node_ready() { [ "$(K get node localhost -o 'jsonpath={.status.conditions[?(@.type=="Ready")].status}')" = True ]; }
+wait_for 90 node_ready || fail "node localhost not Ready after 90 s"
+log "real node up in $(since "$t0")s: $(K get node localhost --no-headers)"

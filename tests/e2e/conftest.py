@@ -1,0 +1,108 @@
+"""Fixtures of the e2e tier: a real one-node cluster the suite starts by itself, the runner image, MinIO.
+
+Session-scoped (started on first use, stopped at the end of the session, also on SIGTERM):
+- `cluster`       -> harness.cluster.Cluster: etcd + apiserver + kcm + scheduler + containerd + a real kubelet
+                     (node "localhost"); `cluster.kubeconfig`, `cluster.kubectl(*args)`, `cluster.apply(...)`,
+                     `cluster.env()`. KUBECONFIG is set to it for the session, so in-process clients
+                     (kubernetes, kopf) find it too. Needs root.
+- `kwok_cluster`  -> a second Cluster with a kwok fake node ("kwok-node-0"): pods never run, they just turn
+                     Succeeded. For scale / operator-logic tests. No root needed.
+- `runner_image`  -> "uavtest-runner:dev", built from the current working tree and imported into `cluster`'s
+                     containerd; pods use it with imagePullPolicy: Never.
+- `minio`         -> harness.minio.MinioServer: `.endpoint` (127.0.0.1:port), `.access_key`, `.secret_key`,
+                     `.client()`.
+Module-scoped:
+- `namespace`     -> a fresh namespace in `cluster` for the test module, deleted afterwards.
+- `kwok_namespace`-> the same in `kwok_cluster`.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import secrets
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests/ -> `import harness`
+
+from harness.cluster import (
+    REPO_ROOT,
+    RUNNER_IMAGE,
+    Cluster,
+    build_runner_image,
+    start_cluster,
+    terminate_on_sigterm,
+)
+from harness.minio import MinioServer, start_minio
+
+
+def _ns_name(request: pytest.FixtureRequest) -> str:
+    base = re.sub(r"[^a-z0-9-]+", "-", request.module.__name__.rsplit(".", 1)[-1].lower()).strip("-")
+    return f"{base[:40]}-{secrets.token_hex(3)}"
+
+
+@pytest.fixture(scope="session")
+def cluster() -> Iterator[Cluster]:
+    """A real one-node cluster on 127.0.0.1 (built and started by the suite; torn down at the end)."""
+    if os.geteuid() != 0:
+        pytest.skip("the e2e cluster's real node (kubelet + containerd) needs root")
+    with terminate_on_sigterm():
+        c = start_cluster(real_node=True)
+        previous = os.environ.get("KUBECONFIG")
+        os.environ["KUBECONFIG"] = str(c.kubeconfig)
+        try:
+            yield c
+        finally:
+            if previous is None:
+                os.environ.pop("KUBECONFIG", None)
+            else:
+                os.environ["KUBECONFIG"] = previous
+            c.stop()
+
+
+@pytest.fixture(scope="session")
+def kwok_cluster() -> Iterator[Cluster]:
+    """Control plane + kwok fake node "kwok-node-0" (every pod 'succeeds' without running)."""
+    with terminate_on_sigterm():
+        c = start_cluster(real_node=False, kwok=True)
+        try:
+            yield c
+        finally:
+            c.stop()
+
+
+@pytest.fixture(scope="session")
+def runner_image(cluster: Cluster) -> str:
+    """The runner image built from the working tree, imported into the node; returns its name."""
+    cluster.import_image(build_runner_image(REPO_ROOT))
+    return RUNNER_IMAGE
+
+
+@pytest.fixture(scope="module")
+def namespace(request: pytest.FixtureRequest, cluster: Cluster) -> Iterator[str]:
+    """A namespace of its own for each test module, in `cluster`."""
+    name = cluster.create_namespace(_ns_name(request))
+    yield name
+    cluster.delete_namespace(name)
+
+
+@pytest.fixture(scope="module")
+def kwok_namespace(request: pytest.FixtureRequest, kwok_cluster: Cluster) -> Iterator[str]:
+    name = kwok_cluster.create_namespace(_ns_name(request))
+    yield name
+    kwok_cluster.delete_namespace(name)
+
+
+@pytest.fixture(scope="session")
+def minio() -> Iterator[MinioServer]:
+    """A MinIO server on a free loopback port with random credentials."""
+    with terminate_on_sigterm():
+        server = start_minio()
+        try:
+            yield server
+        finally:
+            server.stop()

@@ -1,0 +1,273 @@
+"""Helpers of the operator's e2e tests: the CRD, a least-privilege identity, the operator process.
+
+The operator runs as a real subprocess (`uavtest operator -n NS`), watching only the test module's
+namespace, with a kubeconfig whose user is a ServiceAccount holding exactly the chart's RBAC rules
+(charts/uavtest/files/rbac/): a call the chart does not grant fails the tests.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import urllib.request
+from pathlib import Path
+from typing import Any
+
+import yaml
+from prometheus_client.parser import text_string_to_metric_families
+
+from harness.cluster import REPO_ROOT, Cluster, free_ports
+from harness.minio import MinioServer
+
+CRD = REPO_ROOT / "crds" / "uavtest.yaml"
+RBAC = REPO_ROOT / "charts" / "uavtest" / "files" / "rbac"
+SECRET = "uavtest-s3"
+SA = "uavtest-operator"
+
+
+def install_crd(cluster: Cluster) -> None:
+    cluster.kubectl("apply", "-f", str(CRD))
+    cluster.kubectl("wait", "--for=condition=Established", "crd/uavtests.uavtest.io", "--timeout=60s")
+
+
+def store_secret(cluster: Cluster, namespace: str, minio: MinioServer) -> None:
+    cluster.apply(
+        {
+            "apiVersion": "v1",
+            "kind": "Secret",
+            "metadata": {"name": SECRET, "namespace": namespace},
+            "stringData": {"accessKey": minio.access_key, "secretKey": minio.secret_key},
+        }
+    )
+
+
+def least_privilege_kubeconfig(cluster: Cluster, namespace: str, out: Path) -> Path:
+    """A kubeconfig for a ServiceAccount bound to the chart's rules only (Role in NAMESPACE + CRD reads)."""
+    namespaced = yaml.safe_load((RBAC / "namespaced-rules.yaml").read_text())
+    cluster_rules = yaml.safe_load((RBAC / "cluster-rules.yaml").read_text())
+    subject = [{"kind": "ServiceAccount", "name": SA, "namespace": namespace}]
+    crd_role = f"uavtest-crds-{namespace}"
+    rbac = "rbac.authorization.k8s.io"
+    cluster.apply(
+        {"apiVersion": "v1", "kind": "ServiceAccount", "metadata": {"name": SA, "namespace": namespace}},
+        {
+            "apiVersion": f"{rbac}/v1",
+            "kind": "Role",
+            "metadata": {"name": SA, "namespace": namespace},
+            "rules": namespaced,
+        },
+        {
+            "apiVersion": f"{rbac}/v1",
+            "kind": "RoleBinding",
+            "metadata": {"name": SA, "namespace": namespace},
+            "roleRef": {"apiGroup": rbac, "kind": "Role", "name": SA},
+            "subjects": subject,
+        },
+        {
+            "apiVersion": f"{rbac}/v1",
+            "kind": "ClusterRole",
+            "metadata": {"name": crd_role},
+            "rules": cluster_rules,
+        },
+        {
+            "apiVersion": f"{rbac}/v1",
+            "kind": "ClusterRoleBinding",
+            "metadata": {"name": crd_role},
+            "roleRef": {"apiGroup": rbac, "kind": "ClusterRole", "name": crd_role},
+            "subjects": subject,
+        },
+    )
+    token = cluster.kubectl("create", "token", SA, "-n", namespace, "--duration=4h").strip()
+    config = yaml.safe_load(cluster.kubeconfig.read_text())
+    user = "uavtest-operator"
+    config["users"] = [{"name": user, "user": {"token": token}}]
+    for ctx in config["contexts"]:
+        ctx["context"]["user"] = user
+        ctx["context"]["namespace"] = namespace
+    out.write_text(yaml.safe_dump(config))
+    return out
+
+
+def pod_reachable(address: str) -> str:
+    """host:port of a TCP relay pods can reach, forwarding to ADDRESS on the host's loopback.
+
+    MinIO listens on 127.0.0.1 only; replica pods live behind the CNI bridge. The relay listens on
+    the bridge's address (the pods' gateway) when it has one.
+    """
+    bridge_ip = _bridge_address()
+    host, port = address.rsplit(":", 1)
+    relay = _Relay(bridge_ip, (host, int(port)))
+    return f"{bridge_ip}:{relay.port}"
+
+
+def _bridge_address() -> str:
+    bridge = os.environ.get("UAVTEST_BRIDGE", "uavtest0")
+    out = subprocess.run(["ip", "-j", "-4", "addr", "show", "dev", bridge], capture_output=True, text=True)
+    if out.returncode == 0:
+        for link in json.loads(out.stdout or "[]"):
+            for info in link.get("addr_info", []):
+                return str(info["local"])
+    raise RuntimeError(f"the CNI bridge {bridge} has no IPv4 address: pods cannot reach the host's MinIO")
+
+
+class _Relay:
+    """A tiny TCP forwarder (threads), alive for the test session."""
+
+    def __init__(self, listen_host: str, target: tuple[str, int]) -> None:
+        self.target = target
+        self.server = socket.create_server((listen_host, 0))
+        self.port = self.server.getsockname()[1]
+        threading.Thread(target=self._accept, daemon=True).start()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                client, _ = self.server.accept()
+            except OSError:
+                return
+            try:
+                upstream = socket.create_connection(self.target, timeout=10)
+            except OSError:
+                client.close()
+                continue
+            for a, b in ((client, upstream), (upstream, client)):
+                threading.Thread(target=self._pipe, args=(a, b), daemon=True).start()
+
+    @staticmethod
+    def _pipe(src: socket.socket, dst: socket.socket) -> None:
+        try:
+            while data := src.recv(65536):
+                dst.sendall(data)
+        except OSError:
+            pass
+        finally:
+            with contextlib.suppress(OSError):
+                dst.shutdown(socket.SHUT_WR)
+
+
+class Operator:
+    """`uavtest operator -n NAMESPACE` as a subprocess that can be killed and started again."""
+
+    def __init__(
+        self,
+        cluster: Cluster,
+        namespace: str,
+        minio: MinioServer,
+        *,
+        bucket: str,
+        pod_endpoint: str,
+        kubeconfig: Path,
+        log: Path,
+        runner_image: str,
+    ) -> None:
+        self.cluster = cluster
+        self.namespace = namespace
+        self.log = log
+        (self.metrics_port,) = free_ports(1)
+        self.env = {
+            **os.environ,
+            "KUBECONFIG": str(kubeconfig),
+            "UAVTEST_OPERATOR_RUNNER_IMAGE": runner_image,
+            "UAVTEST_OPERATOR_IMAGE_PULL_POLICY": "Never",
+            "UAVTEST_OPERATOR_STORE_URL": f"s3://{bucket}",
+            "UAVTEST_OPERATOR_POD_S3_ENDPOINT": pod_endpoint,
+            "UAVTEST_OPERATOR_S3_SECRET": SECRET,
+            "UAVTEST_S3_ENDPOINT": minio.endpoint,
+            "UAVTEST_S3_ACCESS_KEY": minio.access_key,
+            "UAVTEST_S3_SECRET_KEY": minio.secret_key,
+            "UAVTEST_S3_RETRY_TOTAL": "10",
+        }
+        self.proc: subprocess.Popen[bytes] | None = None
+        self.starts = 0
+
+    def start(self) -> None:
+        self.starts += 1
+        with open(self.log, "ab") as out:
+            out.write(f"--- start {self.starts}\n".encode())
+            self.proc = subprocess.Popen(
+                [
+                    sys.executable,
+                    "-m",
+                    "uavtest.cli",
+                    "operator",
+                    "-n",
+                    self.namespace,
+                    "--metrics-port",
+                    str(self.metrics_port),
+                ],
+                env=self.env,
+                stdout=out,
+                stderr=subprocess.STDOUT,
+                stdin=subprocess.DEVNULL,
+            )
+        if not self.cluster.wait_until(
+            lambda: self.metrics_text() is not None or self.proc.poll() is not None, 60
+        ):
+            raise RuntimeError(f"operator did not serve metrics:\n{self.log_text()[-3000:]}")
+        if self.proc.poll() is not None:
+            raise RuntimeError(f"operator exited {self.proc.returncode}:\n{self.log_text()[-3000:]}")
+
+    def kill(self) -> None:
+        """SIGKILL: no clean-up, like a node failure or an OOM kill."""
+        assert self.proc is not None
+        self.proc.send_signal(signal.SIGKILL)
+        self.proc.wait(30)
+
+    def stop(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(30)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(10)
+
+    def log_text(self) -> str:
+        return self.log.read_text(errors="replace") if self.log.exists() else ""
+
+    def metrics_text(self) -> str | None:
+        try:
+            with urllib.request.urlopen(f"http://127.0.0.1:{self.metrics_port}/metrics", timeout=5) as r:
+                return r.read().decode()
+        except OSError:
+            return None
+
+    def metric(self, name: str, **labels: str) -> float | None:
+        text = self.metrics_text() or ""
+        for family in text_string_to_metric_families(text):
+            for s in family.samples:
+                if s.name == name and all(s.labels.get(k) == v for k, v in labels.items()):
+                    return float(s.value)
+        return None
+
+
+def wait_status(
+    cluster: Cluster, namespace: str, name: str, jsonpath: str, value: str, timeout: float
+) -> None:
+    """kubectl wait --for=jsonpath=... on a UavTest (no polling in the test itself)."""
+    cluster.kubectl(
+        "wait",
+        "-n",
+        namespace,
+        f"uavtest/{name}",
+        f"--for=jsonpath={jsonpath}={value}",
+        f"--timeout={int(timeout)}s",
+        timeout=timeout + 30,
+    )
+
+
+def wait_complete(cluster: Cluster, namespace: str, name: str, timeout: float = 900) -> dict[str, Any]:
+    wait_status(
+        cluster, namespace, name, '{.status.conditions[?(@.type=="Complete")].status}', "True", timeout
+    )
+    return cluster.kubectl_json("get", "uavtest", name, "-n", namespace)["status"]
+
+
+def store_keys(minio: MinioServer, bucket: str, prefix: str) -> list[str]:
+    return sorted(o.object_name for o in minio.client().list_objects(bucket, prefix=prefix, recursive=True))

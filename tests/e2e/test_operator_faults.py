@@ -1,0 +1,152 @@
+"""Faults on a real cluster: the operator killed mid-run, a replica pod deleted, MinIO unreachable."""
+
+from __future__ import annotations
+
+import secrets
+import signal
+import threading
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+import yaml
+from operator_support import (
+    Operator,
+    install_crd,
+    least_privilege_kubeconfig,
+    pod_reachable,
+    store_keys,
+    store_secret,
+    wait_complete,
+    wait_status,
+)
+
+from harness.cluster import REPO_ROOT, Cluster
+from harness.minio import MinioServer
+
+pytestmark = [pytest.mark.e2e, pytest.mark.slow]
+
+MINIO_OUTAGE_SECONDS = 30.0
+
+
+@pytest.fixture(scope="module")
+def bucket(minio: MinioServer) -> str:
+    name = f"uavtest-faults-{secrets.token_hex(3)}"
+    minio.client().make_bucket(name)
+    return name
+
+
+@pytest.fixture(scope="module")
+def operator(
+    cluster: Cluster,
+    namespace: str,
+    minio: MinioServer,
+    runner_image: str,
+    bucket: str,
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Iterator[Operator]:
+    install_crd(cluster)
+    store_secret(cluster, namespace, minio)
+    tmp = tmp_path_factory.mktemp("operator-faults")
+    op = Operator(
+        cluster,
+        namespace,
+        minio,
+        bucket=bucket,
+        pod_endpoint=pod_reachable(minio.endpoint),
+        kubeconfig=least_privilege_kubeconfig(cluster, namespace, tmp / "kubeconfig"),
+        log=tmp / "operator.log",
+        runner_image=runner_image,
+    )
+    op.start()
+    yield op
+    cluster.kubectl("delete", "uavtests", "--all", "-n", namespace, "--timeout=120s", check=False, timeout=150)
+    op.stop()
+
+
+def hover(name: str, namespace: str, *, replicas: int, parallelism: int) -> dict[str, Any]:
+    doc = yaml.safe_load((REPO_ROOT / "examples" / "hover.yaml").read_text())
+    doc["metadata"] = {"name": name, "namespace": namespace}
+    doc["spec"]["replicas"] = replicas
+    doc["spec"]["parallelism"] = parallelism
+    return doc
+
+
+def jobs_of(cluster: Cluster, namespace: str, name: str) -> list[dict[str, Any]]:
+    return cluster.kubectl_json("get", "jobs", "-n", namespace, "-l", f"uavtest.io/test={name}")["items"]
+
+
+def wait_running(cluster: Cluster, namespace: str, name: str, timeout: float = 300) -> None:
+    wait_status(cluster, namespace, name, "{.status.running}", "1", timeout)
+
+
+def test_operator_killed_mid_run_restarts_without_duplicate_jobs(
+    cluster: Cluster, namespace: str, operator: Operator
+) -> None:
+    name = "killed-operator"
+    cluster.apply(hover(name, namespace, replicas=3, parallelism=1))
+    wait_running(cluster, namespace, name)
+    operator.kill()
+    operator.start()
+    status = wait_complete(cluster, namespace, name)
+    assert len(jobs_of(cluster, namespace, name)) == 1
+    assert (status["replicas"], status["passed"], status["errors"]) == (3, 3, 0), status
+
+
+def test_operator_down_while_a_test_is_created_starts_it_once(
+    cluster: Cluster, namespace: str, operator: Operator
+) -> None:
+    name = "created-while-down"
+    operator.kill()
+    cluster.apply(hover(name, namespace, replicas=2, parallelism=2))
+    operator.start()
+    status = wait_complete(cluster, namespace, name)
+    assert len(jobs_of(cluster, namespace, name)) == 1
+    assert status["passed"] == 2
+
+
+def test_a_deleted_replica_pod_is_retried_and_counted_once(
+    cluster: Cluster, namespace: str, operator: Operator
+) -> None:
+    name = "deleted-pod"
+    cluster.apply(hover(name, namespace, replicas=2, parallelism=2))
+    selector = f"uavtest.io/test={name},batch.kubernetes.io/job-completion-index=0"
+    cluster.kubectl(
+        "wait",
+        "-n",
+        namespace,
+        "pod",
+        "-l",
+        selector,
+        "--for=jsonpath={.status.phase}=Running",
+        "--timeout=300s",
+        timeout=330,
+    )
+    cluster.kubectl("delete", "pod", "-n", namespace, "-l", selector, "--wait=false")
+    status = wait_complete(cluster, namespace, name)
+    assert (status["replicas"], status["passed"], status["failed"], status["errors"]) == (2, 2, 0, 0), status
+    assert sorted(r["index"] for r in status["results"]) == [0, 1]
+    job = jobs_of(cluster, namespace, name)[0]
+    assert job["status"].get("failed", 0) >= 1  # the deleted attempt, retried with the same index
+
+
+def test_minio_unreachable_for_30s_while_replicas_upload_loses_nothing(
+    cluster: Cluster, namespace: str, operator: Operator, minio: MinioServer, bucket: str
+) -> None:
+    name = "minio-outage"
+    cluster.apply(hover(name, namespace, replicas=3, parallelism=3))
+    wait_running(cluster, namespace, name)
+    # the server stops answering (SIGSTOP: connections hang, like a partition) for 30 s
+    minio.process.send_signal(signal.SIGSTOP)
+    resume = threading.Timer(MINIO_OUTAGE_SECONDS, minio.process.send_signal, args=(signal.SIGCONT,))
+    resume.start()
+    try:
+        status = wait_complete(cluster, namespace, name)
+    finally:
+        resume.join()
+    assert (status["passed"], status["errors"]) == (3, 0), status
+    run = status["runId"]
+    keys = store_keys(minio, bucket, f"{namespace}/{name}/{run}/")
+    for i in range(3):
+        for artifact in ("flight.ulg", "trajectory.csv", "result.json"):
+            assert f"{namespace}/{name}/{run}/replica-{i}/{artifact}" in keys

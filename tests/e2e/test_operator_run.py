@@ -1,0 +1,224 @@
+"""The operator on a real cluster: kubectl apply a UavTest → real pods fly the built-in sim → MinIO → status.
+
+The operator runs as `uavtest operator` with a ServiceAccount holding only the chart's RBAC rules.
+"""
+
+from __future__ import annotations
+
+import json
+import secrets
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+import yaml
+from operator_support import (
+    Operator,
+    install_crd,
+    least_privilege_kubeconfig,
+    pod_reachable,
+    store_keys,
+    store_secret,
+    wait_complete,
+)
+
+from harness.cluster import REPO_ROOT, Cluster, KubectlError
+from harness.minio import MinioServer
+
+pytestmark = [pytest.mark.e2e, pytest.mark.slow]
+
+EXAMPLES = REPO_ROOT / "examples"
+
+
+@pytest.fixture(scope="module")
+def bucket(minio: MinioServer) -> str:
+    name = f"uavtest-e2e-{secrets.token_hex(3)}"
+    minio.client().make_bucket(name)
+    return name
+
+
+@pytest.fixture(scope="module")
+def operator(
+    cluster: Cluster,
+    namespace: str,
+    minio: MinioServer,
+    runner_image: str,
+    bucket: str,
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Iterator[Operator]:
+    install_crd(cluster)
+    store_secret(cluster, namespace, minio)
+    tmp = tmp_path_factory.mktemp("operator")
+    op = Operator(
+        cluster,
+        namespace,
+        minio,
+        bucket=bucket,
+        pod_endpoint=pod_reachable(minio.endpoint),
+        kubeconfig=least_privilege_kubeconfig(cluster, namespace, tmp / "kubeconfig"),
+        log=tmp / "operator.log",
+        runner_image=runner_image,
+    )
+    op.start()
+    yield op
+    # delete the tests while the operator still runs: it removes its finalizer from them
+    cluster.kubectl("delete", "uavtests", "--all", "-n", namespace, "--timeout=120s", check=False, timeout=150)
+    op.stop()
+    forbidden = [line for line in op.log_text().splitlines() if "403" in line or "forbidden" in line.lower()]
+    assert not forbidden, f"the chart's RBAC misses a call: {forbidden[:5]}"
+
+
+def apply_example(cluster: Cluster, namespace: str, name: str) -> str:
+    doc = yaml.safe_load((EXAMPLES / name).read_text())
+    cluster.kubectl("apply", "-n", namespace, "-f", str(EXAMPLES / name))
+    return str(doc["metadata"]["name"])
+
+
+def test_example_flies_in_parallel_pods_and_reports(
+    cluster: Cluster, namespace: str, operator: Operator, minio: MinioServer, bucket: str
+) -> None:
+    name = apply_example(cluster, namespace, "uavtest.yaml")
+    status = wait_complete(cluster, namespace, name)
+    log = operator.log_text()[-4000:]
+    assert status["phase"] == "Succeeded", (status, log)
+    assert (status["replicas"], status["passed"], status["failed"], status["errors"]) == (3, 3, 0, 0)
+    assert status["flakiness"] == 0 and status["flaky"] is False
+    assert sorted((r["index"], r["seed"], r["verdict"]) for r in status["results"]) == [
+        (0, 7, "pass"),
+        (1, 8, "pass"),
+        (2, 9, "pass"),
+    ]
+    # one Indexed Job, its pods: sitl as a native sidecar next to the runner
+    jobs = cluster.kubectl_json("get", "jobs", "-n", namespace, "-l", f"uavtest.io/test={name}")["items"]
+    assert len(jobs) == 1
+    assert jobs[0]["spec"]["completionMode"] == "Indexed" and jobs[0]["spec"]["completions"] == 3
+    pods = cluster.kubectl_json("get", "pods", "-n", namespace, "-l", f"uavtest.io/test={name}")["items"]
+    indexes = sorted(int(p["metadata"]["labels"]["batch.kubernetes.io/job-completion-index"]) for p in pods)
+    assert indexes == [0, 1, 2]
+    assert all(p["status"]["phase"] == "Succeeded" for p in pods)
+    # artifacts of every replica and the aggregate are in MinIO
+    run = status["runId"]
+    keys = store_keys(minio, bucket, f"{namespace}/{name}/{run}/")
+    for i in range(3):
+        for artifact in ("flight.ulg", "trajectory.csv", "result.json"):
+            assert f"{namespace}/{name}/{run}/replica-{i}/{artifact}" in keys
+    assert f"{namespace}/{name}/{run}/aggregate/summary.json" in keys
+    summary = json.loads(
+        minio.client().get_object(bucket, f"{namespace}/{name}/{run}/aggregate/summary.json").read()
+    )
+    assert summary["passed"] == 3
+    assert status["artifacts"]["summary"] == f"s3://{bucket}/{namespace}/{name}/{run}/aggregate/summary.json"
+    # Events and metrics
+    events = cluster.kubectl(
+        "get", "events", "-n", namespace, "--field-selector", f"involvedObject.name={name}"
+    )
+    assert "TestPassed" in events
+    labels = {"namespace": namespace, "test": name}
+    assert operator.metric("uavtest_replicas_total", verdict="pass", **labels) == 3
+    assert operator.metric("uavtest_test_flakiness", **labels) == 0
+    assert (operator.metric("uavtest_runs_total", namespace=namespace, result="succeeded") or 0) >= 1
+    assert (operator.metric("uavtest_min_obstacle_distance_meters_count", namespace=namespace) or 0) >= 3
+
+
+def test_kubectl_get_shows_the_columns(cluster: Cluster, namespace: str, operator: Operator) -> None:
+    name = "obstacle-pass"
+    wait_complete(cluster, namespace, name)
+    out = cluster.kubectl("get", "uavt", name, "-n", namespace).splitlines()
+    header = out[0].split()
+    assert header[:5] == ["NAME", "PHASE", "REPLICAS", "PASSED", "FAILED"]
+    assert "FLAKINESS" in header
+    row = dict(zip(header, out[1].split(), strict=False))
+    assert (row["PHASE"], row["REPLICAS"], row["PASSED"], row["FAILED"], row["FLAKINESS"]) == (
+        "Succeeded",
+        "3",
+        "3",
+        "0",
+        "0",
+    )
+
+
+def test_a_failing_test_ends_failed(cluster: Cluster, namespace: str, operator: Operator) -> None:
+    name = apply_example(cluster, namespace, "collision.yaml")
+    cluster.kubectl(
+        "wait", "-n", namespace, f"uavtest/{name}", "--for=condition=Failed", "--timeout=900s", timeout=930
+    )
+    status = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)["status"]
+    assert status["phase"] == "Failed"
+    assert status["failed"] == 3 and status["flakiness"] == 1 and status["flaky"] is False
+    assert all(r["verdict"] == "fail" and r["reason"] for r in status["results"])
+    # a fail verdict is a result, not an accident: never retried
+    job = cluster.kubectl_json("get", "jobs", "-n", namespace, "-l", f"uavtest.io/test={name}")["items"][0]
+    pods = cluster.kubectl_json("get", "pods", "-n", namespace, "-l", f"uavtest.io/test={name}")["items"]
+    assert len(pods) == 3, [p["metadata"]["name"] for p in pods]
+    assert job["status"].get("failedIndexes") == "0-2"
+
+
+def test_a_flaky_example_reports_flakiness_between_0_and_1(
+    cluster: Cluster, namespace: str, operator: Operator
+) -> None:
+    name = apply_example(cluster, namespace, "near-miss-wind.yaml")
+    status = wait_complete(cluster, namespace, name, timeout=1800)
+    assert status["passed"] > 0 and status["failed"] > 0, status
+    assert 0 < status["flakiness"] < 1 and status["flaky"] is True
+    flaky = next(c for c in status["conditions"] if c["type"] == "Flaky")
+    assert flaky["status"] == "True"
+    events = cluster.kubectl(
+        "get", "events", "-n", namespace, "--field-selector", f"involvedObject.name={name}"
+    )
+    assert "FlakyTest" in events
+
+
+def test_spec_changes_are_rejected(cluster: Cluster, namespace: str, operator: Operator) -> None:
+    with pytest.raises(KubectlError) as e:
+        cluster.kubectl(
+            "patch",
+            "uavtest",
+            "obstacle-pass",
+            "-n",
+            namespace,
+            "--type=merge",
+            "-p",
+            '{"spec":{"replicas":5}}',
+        )
+    assert "spec is immutable" in e.value.stderr
+
+
+def test_an_invalid_test_is_rejected_at_admission_naming_the_field(cluster: Cluster, namespace: str) -> None:
+    bad = yaml.safe_load((EXAMPLES / "hover.yaml").read_text())
+    bad["metadata"] = {"name": "bad-replicas", "namespace": namespace}
+    bad["spec"]["replicas"] = 0
+    with pytest.raises(KubectlError) as e:
+        cluster.kubectl("apply", "-f", "-", input=json.dumps(bad))
+    assert "spec.replicas" in e.value.stderr
+    assert cluster.kubectl("get", "uavtest", "bad-replicas", "-n", namespace, check=False) == ""
+
+
+def test_uavtest_run_engine_kubernetes_waits_and_exits_like_the_local_engine(
+    cluster: Cluster, namespace: str, operator: Operator, tmp_path: Path
+) -> None:
+    def run(example: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "uavtest.cli",
+                "run",
+                str(EXAMPLES / example),
+                "--engine",
+                "kubernetes",
+                "--namespace",
+                namespace,
+            ],
+            env=cluster.env(),
+            capture_output=True,
+            text=True,
+            timeout=1200,
+        )
+
+    passing = run("hover.yaml")
+    assert passing.returncode == 0, passing.stderr[-3000:]
+    assert "3 passed" in passing.stderr
+    failing = run("collision.yaml")
+    assert failing.returncode == 1, failing.stderr[-3000:]

@@ -1,0 +1,54 @@
+"""Every example in examples/ has the outcome its header promises (real sitl and runner)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from _engine_helpers import uavtest_run
+
+pytestmark = pytest.mark.integration
+
+
+def test_hover_passes(repo_root: Path, tmp_path: Path) -> None:
+    out = uavtest_run(repo_root / "examples/hover.yaml", tmp_path)
+    assert out.code == 0, out.stderr[-3000:]
+    assert out.summary is not None
+    assert out.summary["passed"] == 3 and out.summary["flakiness"] == 0.0
+    for r in out.summary["results"]:
+        assert r["metrics"]["mission_completed"] is True
+        assert 4.0 < r["metrics"]["max_altitude"] < 6.5
+
+
+def test_obstacle_pass_passes_with_clearance(repo_root: Path, tmp_path: Path) -> None:
+    out = uavtest_run(repo_root / "examples/obstacle-pass.yaml", tmp_path)
+    assert out.code == 0, out.stderr[-3000:]
+    assert out.summary is not None and out.summary["passed"] == 3
+    assert out.summary["min_obstacle_distance"]["min"] > 1.5
+
+
+def test_collision_fails(repo_root: Path, tmp_path: Path) -> None:
+    out = uavtest_run(repo_root / "examples/collision.yaml", tmp_path)
+    assert out.code == 1, out.stderr[-3000:]
+    assert out.summary is not None
+    assert out.summary["failed"] == 3 and out.summary["flakiness"] == 1.0 and not out.summary["flaky"]
+    for r in out.summary["results"]:
+        assert r["metrics"]["collision"] is True
+        assert "collision" in r["reason"].lower()
+
+
+def test_near_miss_in_wind_is_flaky(repo_root: Path, tmp_path: Path) -> None:
+    out = uavtest_run(repo_root / "examples/near-miss-wind.yaml", tmp_path)
+    assert out.code == 1, out.stderr[-3000:]
+    assert out.summary is not None
+    assert out.summary["errors"] == 0
+    assert 0 < out.summary["flakiness"] < 1 and out.summary["flaky"] is True
+    failed = [r for r in out.summary["results"] if r["verdict"] == "fail"]
+    assert all(r["metrics"]["min_obstacle_distance"] < 1.5 for r in failed)
+    assert all(not r["metrics"]["collision"] for r in failed)  # a near miss, not a crash
+
+
+def test_cluster_example_is_a_valid_three_replica_test_that_passes(repo_root: Path, tmp_path: Path) -> None:
+    out = uavtest_run(repo_root / "examples/uavtest.yaml", tmp_path)
+    assert out.code == 0, out.stderr[-3000:]
+    assert out.summary is not None and out.summary["replicas"] == 3 and out.summary["passed"] == 3

@@ -1,0 +1,104 @@
+"""`uavtest runner` unchanged against real PX4 SITL (SIH physics): wall clock, MAVLink log download.
+
+Runs when ``UAVTEST_PX4_BIN`` names a PX4 SITL binary (``build/px4_sitl_default/bin/px4`` of a
+PX4 v1.15 build); skips otherwise. PX4 instance 0 sends its onboard link to 14540, as always.
+``UAVTEST_PX4_SPEED`` (default 10) sets PX4_SIM_SPEED_FACTOR.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from uavtest.analysis.models import ReplicaResult, Verdict
+from uavtest.analysis.trajectory import Trajectory
+
+pytestmark = [pytest.mark.integration, pytest.mark.px4, pytest.mark.slow]
+
+
+@pytest.fixture
+def px4(tmp_path: Path) -> subprocess.Popen[bytes]:
+    binary = os.environ.get("UAVTEST_PX4_BIN")
+    if not binary:
+        pytest.skip("UAVTEST_PX4_BIN is not set (a PX4 v1.15 SITL binary: build/px4_sitl_default/bin/px4)")
+    exe = Path(binary).resolve()
+    if not exe.is_file():
+        pytest.fail(f"UAVTEST_PX4_BIN={binary} is not a file")
+    build = exe.parent.parent  # build/px4_sitl_default
+    rootfs = tmp_path / "rootfs"
+    rootfs.mkdir()
+    env = {
+        **os.environ,
+        "PX4_SIM_MODEL": "sihsim_quadx",
+        "PX4_SYS_AUTOSTART": "10040",
+        "PX4_SIMULATOR": "sihsim",
+        "PX4_SIM_SPEED_FACTOR": os.environ.get("UAVTEST_PX4_SPEED", "10"),
+        "HEADLESS": "1",
+    }
+    log = open(tmp_path / "px4.log", "wb")  # noqa: SIM115
+    proc = subprocess.Popen(
+        [str(exe), "-i", "0", "-d", str(build / "etc")],
+        cwd=rootfs,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        stdout=log,
+        stderr=subprocess.STDOUT,
+    )
+    yield proc  # type: ignore[misc]
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(5)
+    log.close()
+    shutil.rmtree(rootfs, ignore_errors=True)
+
+
+def test_the_runner_flies_a_mission_on_px4_and_downloads_its_log(
+    px4: subprocess.Popen[bytes], tmp_path: Path
+) -> None:
+    test = tmp_path / "square.yaml"
+    spec = {
+        "timeout": 300,
+        "vehicle": {"simulator": "px4", "params": {"MIS_TAKEOFF_ALT": 5.0, "MPC_XY_CRUISE": 8.0}},
+        "mission": {
+            "takeoffAltitude": 10,
+            "waypoints": [{"x": 30, "y": 0, "z": -10}, {"x": 30, "y": 30, "z": -10}],
+        },
+        # PX4 SIH is ready ~36 s after boot; arming right then can stall the takeoff: start at 50 s
+        "commands": [{"at": 50, "action": "mode", "mode": "mission"}],
+    }
+    doc = {
+        "apiVersion": "uavtest.io/v1alpha1",
+        "kind": "UavTest",
+        "metadata": {"name": "px4-square"},
+        "spec": spec,
+    }
+    test.write_text(yaml.safe_dump(doc))
+    store = tmp_path / "store"
+    cmd = [sys.executable, "-m", "uavtest.cli", "runner", "--test", str(test), "--store", str(store)]
+    cmd += ["--run-id", "px4", "--connect", "udpin:127.0.0.1:14540", "--connect-timeout", "60"]
+    done = subprocess.run(
+        cmd,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    result = ReplicaResult.model_validate_json(done.stdout.strip().splitlines()[-1])
+    assert result.verdict is Verdict.PASS, f"{result.reason}\n{done.stderr[-4000:]}"
+    assert done.returncode == 0
+    assert "lockstep" not in done.stderr  # PX4 runs on its own clock
+    replica = store / "local" / "px4-square" / "px4" / "replica-0"
+    assert (replica / "flight.ulg").read_bytes()[:7] == b"ULog\x01\x12\x35"  # downloaded over MAVLink
+    traj = Trajectory.from_csv((replica / "trajectory.csv").read_text())
+    assert traj.x.max() > 28 and traj.y.max() > 28
+    assert result.metrics is not None and result.metrics.mission_completed

@@ -1,0 +1,128 @@
+"""Prometheus metrics scraped over real HTTP, and the Events a finished run posts."""
+
+from __future__ import annotations
+
+import urllib.request
+from collections.abc import Iterator
+
+import pytest
+from controller_bodies import RUN, uavtest_body
+from prometheus_client.parser import text_string_to_metric_families
+
+from uavtest.analysis.flakiness import summarize
+from uavtest.analysis.models import FlightMetrics, ReplicaResult, Verdict
+from uavtest.controller.events import MAX_ERROR_EVENTS, events_for
+from uavtest.controller.metrics import Metrics
+from uavtest.controller.views import UavTestView, uavtest_view
+from uavtest.spec.status import Phase
+
+
+def view(name: str, status: dict[str, object]) -> UavTestView:
+    return uavtest_view(uavtest_body(name=name, status=status))
+
+
+def result(index: int, verdict: Verdict, distance: float = 2.0, wall: float = 42.0) -> ReplicaResult:
+    metrics = None if verdict == Verdict.ERROR else FlightMetrics(min_obstacle_distance=distance)
+    return ReplicaResult(index=index, seed=index, verdict=verdict, metrics=metrics, wall_time=wall)
+
+
+@pytest.fixture
+def tests_now() -> list[UavTestView]:
+    return [
+        view("flaky", {"phase": "Failed", "passed": 3, "failed": 1, "errors": 1, "flakiness": 0.25}),
+        view("steady", {"phase": "Succeeded", "passed": 5, "failed": 0, "errors": 0, "flakiness": 0.0}),
+        view("starting", {"phase": "Pending"}),
+    ]
+
+
+@pytest.fixture
+def metrics(tests_now: list[UavTestView]) -> Iterator[tuple[Metrics, int]]:
+    m = Metrics(lambda: list(tests_now))
+    port = m.serve(0, addr="127.0.0.1")
+    yield m, port
+    m.close()
+
+
+def scrape(port: int) -> dict[tuple[str, tuple[tuple[str, str], ...]], float]:
+    with urllib.request.urlopen(f"http://127.0.0.1:{port}/metrics", timeout=10) as resp:
+        text = resp.read().decode()
+    out = {}
+    for family in text_string_to_metric_families(text):
+        for s in family.samples:
+            out[(s.name, tuple(sorted(s.labels.items())))] = s.value
+    return out
+
+
+def test_test_series_are_computed_from_the_resources_at_scrape_time(
+    metrics: tuple[Metrics, int], tests_now: list[UavTestView]
+) -> None:
+    _, port = metrics
+    got = scrape(port)
+    ns = ("namespace", "team-a")
+    assert got[("uavtest_replicas_total", (ns, ("test", "flaky"), ("verdict", "fail")))] == 1
+    assert got[("uavtest_replicas_total", (ns, ("test", "flaky"), ("verdict", "pass")))] == 3
+    assert got[("uavtest_replicas_total", (ns, ("test", "flaky"), ("verdict", "error")))] == 1
+    assert got[("uavtest_test_flakiness", (ns, ("test", "flaky")))] == 0.25
+    assert got[("uavtest_test_flakiness", (ns, ("test", "steady")))] == 0.0
+    assert ("uavtest_test_flakiness", (ns, ("test", "starting"))) not in got  # no valid replica yet
+    assert got[("uavtest_tests", (ns, ("phase", "Pending")))] == 1
+    # a deleted test leaves no stale series
+    tests_now.pop(0)
+    again = scrape(port)
+    assert not any(labels and ("test", "flaky") in labels for (_, labels) in again)
+
+
+def test_aggregated_runs_are_counted_and_observed(metrics: tuple[Metrics, int]) -> None:
+    m, port = metrics
+    summary = summarize(
+        [
+            result(0, Verdict.PASS, 2.5, 30),
+            result(1, Verdict.FAIL, 0.4, 50),
+            result(2, Verdict.ERROR, wall=5),
+        ],
+        test="flaky",
+        namespace="team-a",
+        run_id=RUN,
+    )
+    m.record_run(summary, "failed")
+    m.reconcile_errors.labels(handler="aggregate").inc()
+    got = scrape(port)
+    ns = ("namespace", "team-a")
+    assert got[("uavtest_runs_total", (ns, ("result", "failed")))] == 1
+    assert got[("uavtest_min_obstacle_distance_meters_count", (ns,))] == 2  # errors have no distance
+    assert got[("uavtest_min_obstacle_distance_meters_bucket", (("le", "0.5"), ns))] == 1
+    assert got[("uavtest_min_obstacle_distance_meters_sum", (ns,))] == pytest.approx(2.9)
+    assert got[("uavtest_replica_duration_seconds_count", (ns,))] == 3
+    assert got[("uavtest_replica_duration_seconds_sum", (ns,))] == 85
+    assert got[("uavtest_reconcile_errors_total", (("handler", "aggregate"),))] == 1
+
+
+def test_two_operators_in_one_process_have_separate_registries() -> None:
+    a, b = Metrics(list), Metrics(list)
+    a.runs.labels(namespace="x", result="succeeded").inc()
+    assert (
+        b.registry.get_sample_value("uavtest_runs_total", {"namespace": "x", "result": "succeeded"}) is None
+    )
+
+
+def test_events_of_a_flaky_failing_run() -> None:
+    summary = summarize(
+        [result(0, Verdict.PASS), result(1, Verdict.FAIL, 0.5), result(2, Verdict.ERROR)],
+        test="t",
+        namespace="n",
+        run_id=RUN,
+    )
+    events = events_for(summary, Phase.FAILED)
+    reasons = [(e.type, e.reason) for e in events]
+    assert reasons == [("Warning", "TestFailed"), ("Warning", "FlakyTest"), ("Warning", "ReplicaError")]
+    assert "flakiness 0.50" in events[1].message
+    assert "replica 2" in events[2].message
+
+
+def test_events_of_a_passing_run_and_many_errors() -> None:
+    passing = summarize([result(0, Verdict.PASS)], test="t", namespace="n", run_id=RUN)
+    assert [(e.type, e.reason) for e in events_for(passing, Phase.SUCCEEDED)] == [("Normal", "TestPassed")]
+    errors = summarize([result(i, Verdict.ERROR) for i in range(9)], test="t", namespace="n", run_id=RUN)
+    events = events_for(errors, Phase.ERROR)
+    assert sum(e.reason == "ReplicaError" for e in events) == MAX_ERROR_EVENTS + 1
+    assert "4 more replicas" in events[-1].message

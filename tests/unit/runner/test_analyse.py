@@ -1,0 +1,70 @@
+"""Stage 7 on real PX4 logs: bench faults are errors, the drone's are judged from the log."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from uavtest.analysis.models import Verdict
+from uavtest.runner.analyse import analyse
+from uavtest.runner.core import Ending, FlightReport
+from uavtest.spec.models import UavTestSpec
+
+# square-mission.ulg: PX4 v1.15 SIH, takeoff to 10 m, 30 m north, 30 m east, land there
+SQUARE = {
+    "mission": {
+        "takeoffAltitude": 10,
+        "waypoints": [{"x": 30, "y": 0, "z": -10}, {"x": 30, "y": 30, "z": -10}],
+    },
+}
+
+
+def flown() -> FlightReport:
+    return FlightReport(ending=Ending.LANDED, start_ms=100_000, end_ms=180_000, armed_ever=True)
+
+
+def test_a_real_px4_flight_of_its_mission_passes(shared_data: Path) -> None:
+    spec = UavTestSpec.model_validate(SQUARE)
+    a = analyse(flown(), shared_data / "px4-sih/square-mission.ulg", spec, index=1, seed=8, wall_time=2.5)
+    assert a.result.verdict is Verdict.PASS, a.result.reason
+    assert a.result.reason == "" and a.result.sim_time == 80.0 and a.result.wall_time == 2.5
+    assert a.trajectory is not None and 30 < a.trajectory.duration < 60
+    assert a.result.metrics is not None and 9 < (a.result.metrics.max_altitude or 0) < 12
+
+
+def test_an_obstacle_on_the_path_fails_the_same_flight_saying_by_how_much(shared_data: Path) -> None:
+    box = {"size": {"l": 4, "w": 4, "h": 20}, "position": {"x": 15, "y": 0}}
+    spec = UavTestSpec.model_validate({**SQUARE, "world": {"obstacles": [box]}})
+    a = analyse(flown(), shared_data / "px4-sih/square-mission.ulg", spec, index=0, seed=0)
+    assert a.result.verdict is Verdict.FAIL
+    assert "collision" in a.result.reason.lower() or "noCollision" in a.result.reason
+    failed = [r.name for r in a.result.assertions if not r.passed]
+    assert "noCollision" in failed
+
+
+def test_a_bench_error_is_never_judged_even_with_a_log(shared_data: Path) -> None:
+    report = flown()
+    report.ending, report.error = Ending.ERROR, "no COMMAND_ACK for mode mission after 5 tries"
+    spec = UavTestSpec.model_validate(SQUARE)
+    a = analyse(report, shared_data / "px4-sih/square-mission.ulg", spec, index=0, seed=0)
+    assert a.result.verdict is Verdict.ERROR
+    assert a.result.reason == "no COMMAND_ACK for mode mission after 5 tries"
+    assert a.result.assertions == []
+    assert a.trajectory is not None  # still stored, for whoever debugs the bench
+
+
+def test_a_missing_log_is_an_error_with_the_reason() -> None:
+    spec = UavTestSpec.model_validate(SQUARE)
+    a = analyse(flown(), None, spec, index=0, seed=0, log_error="log missing: no .ulg in /x after 15 s")
+    assert a.result.verdict is Verdict.ERROR and a.result.reason.startswith("log missing")
+    assert a.trajectory is None
+
+
+def test_an_unreadable_log_is_an_error(tmp_path: Path) -> None:
+    bad = tmp_path / "flight.ulg"
+    bad.write_bytes(b"not a ulog at all")
+    spec = UavTestSpec.model_validate(SQUARE)
+    report = flown()
+    report.min_distance = math.inf
+    a = analyse(report, bad, spec, index=0, seed=0)
+    assert a.result.verdict is Verdict.ERROR and a.result.reason.startswith("log unreadable")

@@ -1,0 +1,116 @@
+"""Stage 4: timed commands on the vehicle clock, Aerialist semantics, ACK handling, sticks."""
+
+from __future__ import annotations
+
+import itertools
+
+from uavtest.runner.commands import (
+    CommandScheduler,
+    arm_command,
+    disarm_command,
+    mode_command,
+    speed_command,
+)
+from uavtest.runner.events import CommandAck, CommandLong, ManualControl
+from uavtest.runner.px4 import AckResult, Cmd, custom_mode, mode_name
+from uavtest.spec.models import Command, FlightMode, Sticks
+
+ARM = Cmd.COMPONENT_ARM_DISARM
+MODE = Cmd.DO_SET_MODE
+
+
+def cmd(at: float, action: str, **kw: object) -> Command:
+    return Command.model_validate({"at": at, "action": action, **kw})
+
+
+def test_px4_mode_encoding() -> None:
+    assert mode_command(FlightMode.MISSION).params[:3] == (1.0, 4.0, 4.0)  # custom flag, AUTO, MISSION
+    assert mode_command(FlightMode.POSITION).params[:3] == (1.0, 3.0, 0.0)
+    assert custom_mode(FlightMode.HOLD) == (4 << 16) | (3 << 24)
+    assert mode_name(custom_mode(FlightMode.RETURN)) == "return"
+    assert disarm_command(force=True).params[:2] == (0.0, 21196.0)
+    assert speed_command(5).params[:3] == (1.0, 5.0, -1.0)
+
+
+def test_commands_wait_for_their_vehicle_time() -> None:
+    s = CommandScheduler([cmd(2.0, "speed", speed=3)])
+    assert s.update(1999, 0.0, armed=True) == []
+    assert s.update(2000, 0.0, armed=True) == [speed_command(3)]
+
+
+def test_a_command_whose_time_has_passed_runs_at_once() -> None:
+    s = CommandScheduler([cmd(0.000001, "mode", mode="hold")])
+    assert s.update(35_000, 0.0, armed=True) == [mode_command(FlightMode.HOLD)]
+
+
+def test_mode_mission_while_disarmed_arms_first_then_switches() -> None:
+    s = CommandScheduler([cmd(1.0, "mode", mode="mission")])
+    assert s.update(1000, 0.0, armed=False) == [arm_command()]
+    assert s.update(1050, 0.1, armed=False) == []  # waiting for the ACK
+    s.handle_ack(CommandAck(ARM, AckResult.ACCEPTED), 1050, 0.1)
+    assert s.update(1100, 0.2, armed=True) == [mode_command(FlightMode.MISSION)]
+    s.handle_ack(CommandAck(MODE, AckResult.ACCEPTED), 1100, 0.2)
+    assert s.idle
+    assert [label for _, label in s.sent] == ["arm (for mode mission)", "mode mission"]
+
+
+def test_mode_mission_while_armed_only_switches() -> None:
+    s = CommandScheduler([cmd(1.0, "mode", mode="takeoff")])
+    assert s.update(1000, 0.0, armed=True) == [mode_command(FlightMode.TAKEOFF)]
+
+
+def test_a_refused_arm_is_retried_every_second_of_vehicle_time_then_given_up() -> None:
+    s = CommandScheduler([cmd(0, "arm")], arm_retry_ms=1000, arm_give_up_ms=3000)
+    assert s.update(0, 0.0, armed=False) == [arm_command()]
+    s.handle_ack(CommandAck(ARM, AckResult.TEMPORARILY_REJECTED), 10, 0.0)
+    assert s.update(900, 5.0, armed=False) == []  # wall time passing does not resend: vehicle time does
+    assert s.update(1010, 5.0, armed=False) == [arm_command()]
+    s.handle_ack(CommandAck(ARM, AckResult.DENIED), 1020, 5.0)
+    assert s.update(2020, 5.0, armed=False) == [arm_command()]
+    s.handle_ack(CommandAck(ARM, AckResult.DENIED), 3010, 5.0)
+    assert s.error == "vehicle refused to arm for 3 s (COMMAND_ACK DENIED)"
+
+
+def test_a_command_without_ack_is_resent_with_a_rising_confirmation_then_is_an_error() -> None:
+    s = CommandScheduler([cmd(0, "mode", mode="hold")], ack_timeout_s=1.0, send_attempts=3)
+    s.update(0, 0.0, armed=True)
+    assert s.update(10, 0.5, armed=True) == []
+    resent = s.update(20, 1.0, armed=True)
+    assert resent == [CommandLong(MODE, mode_command(FlightMode.HOLD).params, confirmation=1)]
+    assert s.update(30, 2.0, armed=True)[0].confirmation == 2  # type: ignore[union-attr]
+    assert s.update(40, 3.0, armed=True) == []
+    assert s.error == "no COMMAND_ACK for mode hold after 3 tries"
+
+
+def test_an_unsupported_command_is_a_bench_error_and_a_denied_mode_a_note() -> None:
+    s = CommandScheduler([cmd(0, "mode", mode="offboard"), cmd(1, "speed", speed=2)])
+    s.update(0, 0.0, armed=True)
+    s.handle_ack(CommandAck(MODE, AckResult.DENIED), 0, 0.0)
+    assert s.error is None and "refused mode offboard" in s.notes[0]
+    s.update(1000, 0.0, armed=True)
+    s.handle_ack(CommandAck(Cmd.DO_CHANGE_SPEED, AckResult.UNSUPPORTED), 1000, 0.0)
+    assert s.error == "vehicle does not support speed 2 (COMMAND_ACK UNSUPPORTED)"
+
+
+def test_sticks_stream_at_20_hz_of_vehicle_time_until_an_auto_mode() -> None:
+    s = CommandScheduler(
+        [cmd(1.0, "sticks", sticks=Sticks(x=0.5, y=-1, z=0.5, r=0)), cmd(3.0, "mode", mode="land")]
+    )
+    sent: list[int] = []
+    for t in range(0, 4000, 10):  # telemetry every 10 ms of vehicle time
+        for msg in s.update(t, t / 1000, armed=True):
+            if isinstance(msg, ManualControl):
+                assert msg == ManualControl(500, -1000, 500, 0)
+                sent.append(t)
+            elif msg == mode_command(FlightMode.LAND):
+                s.handle_ack(CommandAck(MODE, AckResult.ACCEPTED), t, t / 1000)
+    assert sent[0] == 1000 and sent[-1] == 3000
+    assert len(sent) == 41  # 1.0 s .. 3.0 s every 50 ms
+    assert all(b - a == 50 for a, b in itertools.pairwise(sent))
+
+
+def test_ack_of_another_command_is_not_taken_for_ours() -> None:
+    s = CommandScheduler([cmd(0, "mode", mode="hold")])
+    s.update(0, 0.0, armed=True)
+    s.handle_ack(CommandAck(ARM, AckResult.ACCEPTED), 0, 0.0)
+    assert not s.idle
