@@ -6,6 +6,8 @@ This module is the one boundary where ``UavTestError`` becomes a message and an 
 
 from __future__ import annotations
 
+import logging
+import os
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -213,6 +215,11 @@ def sitl(
 
 def main() -> None:
     """Entry point: run the app, translate known errors to messages and exit codes."""
+    logging.basicConfig(
+        level=os.environ.get("UAVTEST_LOG_LEVEL", "INFO").upper(),
+        format="%(levelname)s: %(message)s",
+        stream=sys.stderr,
+    )
     try:
         app(standalone_mode=True)
     except UavTestError as e:

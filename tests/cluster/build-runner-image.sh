@@ -121,7 +121,20 @@ t0=$(now)
 mkdir -p "$WORK/proj/src" "$WORK/proj/dist"
 (cd "$REPO" && git ls-files -z --cached --others --exclude-standard | while IFS= read -r -d '' f; do
    [ -e "$f" ] && printf '%s\0' "$f"; done | tar --null -T - -cf -) | tar -xf - -C "$WORK/proj/src"
-env -u PIP_FIND_LINKS python3 -m pip wheel --quiet --disable-pip-version-check --no-deps \
+# a cached venv with the project's build-system requirements: no isolated build env to download every time
+BUILD_REQS=$(python3 - "$REPO/pyproject.toml" <<'EOF'
+import sys, tomllib
+print("\n".join(tomllib.load(open(sys.argv[1], "rb"))["build-system"]["requires"]))
+EOF
+)
+BE=$IMG/buildenv-$(key "$BUILD_REQS" "$(python3 -V 2>&1)")
+if [ ! -f "$BE/.complete" ]; then
+  rm -rf "$BE"; python3 -m venv "$BE"
+  echo "$BUILD_REQS" > "$WORK/build-reqs.txt"
+  "$BE/bin/python" -m pip install --quiet --disable-pip-version-check -r "$WORK/build-reqs.txt"
+  touch "$BE/.complete"
+fi
+"$BE/bin/python" -m pip wheel --quiet --disable-pip-version-check --no-deps --no-build-isolation \
   -w "$WORK/proj/dist" "$WORK/proj/src"
 M=$WORK/proj/merged
 overlay_mount "$B/upper:$A/rootfs" "$WORK/proj/upper" "$WORK/proj/work" "$M"

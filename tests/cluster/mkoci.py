@@ -16,6 +16,7 @@ mkoci.py image --out OUT.tar --name NAME[:TAG] [--entrypoint JSON] [--cmd JSON] 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import hashlib
 import io
 import json
@@ -29,6 +30,12 @@ OPAQUE_XATTRS = ("trusted.overlay.opaque", "user.overlay.opaque")
 
 
 def sha256_file(path: str) -> str:
+    """The file's sha256, from the `PATH.sha256` side file that write_layer leaves when it is current."""
+    side = path + ".sha256"
+    with contextlib.suppress(OSError):
+        if os.stat(side).st_mtime >= os.stat(path).st_mtime:
+            with open(side) as f:
+                return f.read().strip()
     h = hashlib.sha256()
     with open(path, "rb") as f:
         while b := f.read(CHUNK):
@@ -83,7 +90,10 @@ def write_layer(root: str, out: str, empty: frozenset[str] = frozenset()) -> str
                         tar.addfile(ti, f)
                 else:
                     tar.addfile(ti)
-    return sha256_file(out)
+    digest = sha256_file(out)
+    with open(out + ".sha256", "w") as f:
+        f.write(digest + "\n")
+    return digest
 
 
 def _add_bytes(tar: tarfile.TarFile, name: str, data: bytes) -> None:

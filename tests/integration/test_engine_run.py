@@ -3,12 +3,48 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pytest
-from _engine_helpers import run_dir, uavtest_run
+
+from uavtest.analysis.average import AverageTrajectory
 
 pytestmark = pytest.mark.integration
+
+
+@dataclass
+class RunOutput:
+    code: int
+    summary: dict[str, Any] | None
+    stdout: str
+    stderr: str
+
+    @property
+    def by_index(self) -> dict[int, dict[str, Any]]:
+        assert self.summary is not None, self.stderr[-3000:]
+        return {r["index"]: r for r in self.summary["results"]}
+
+
+def uavtest_run(test: Path, out: Path, *args: str, json_out: bool = True, timeout: float = 900) -> RunOutput:
+    cmd = [sys.executable, "-m", "uavtest.cli", "run", str(test), "--out", str(out), *args]
+    if json_out:
+        cmd.append("--json")
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
+    summary = None
+    if json_out and proc.stdout.strip().startswith("{"):
+        summary = json.loads(proc.stdout)
+    return RunOutput(proc.returncode, summary, proc.stdout, proc.stderr)
+
+
+def run_dir(out: Path, test_name: str) -> Path:
+    """The one run folder ``<out>/local/<test>/<run-id>`` a run created."""
+    runs = sorted((out / "local" / test_name).iterdir())
+    assert len(runs) == 1, runs
+    return runs[0]
 
 
 def test_parallel_replicas_write_the_store_layout(repo_root: Path, tmp_path: Path) -> None:
@@ -26,7 +62,8 @@ def test_parallel_replicas_write_the_store_layout(repo_root: Path, tmp_path: Pat
         assert json.loads((replica / "result.json").read_text())["verdict"] == "pass"
     aggregate = run / "aggregate"
     assert json.loads((aggregate / "summary.json").read_text()) == out.summary
-    assert (aggregate / "average.csv").read_text().startswith("t")
+    average = AverageTrajectory.from_csv((aggregate / "average.csv").read_text())
+    assert len(average.t) > 100 and abs(average.mean[-1, 0] - 40.0) < 2.0  # ends at the last waypoint
     assert (aggregate / "trajectories.png").read_bytes().startswith(b"\x89PNG")
 
 

@@ -104,17 +104,29 @@ def _fly(opts: RunnerOptions, spec: UavTestSpec) -> FlightReport:
     )
     core = ReplicaCore(config)
     with UdpLink(opts.connect) as link:
+        wall, cpu = time.monotonic(), time.process_time()
         report = drive(core, link)
+        wall, cpu = time.monotonic() - wall, time.process_time() - cpu
         codec = link.codec
         log.info(
-            "link: %d datagrams in, %d out; %d frames, %d decoded, %d bad; %d lockstep grants",
+            "link: %d datagrams in, %d out; %d frames, %d decoded, %d bad",
             link.received,
             link.sent,
             codec.frames,
             codec.decoded,
             codec.bad,
-            report.grants,
         )
+        if report.sim_time:
+            per_step = f", {cpu / report.grants * 1e6:.0f} µs runner CPU per step" if report.grants else ""
+            log.info(
+                "flew %.1f vehicle s in %.2f wall s (%.0fx real time), runner CPU %.2f s%s; %d grants",
+                report.sim_time,
+                wall,
+                report.sim_time / wall if wall else 0.0,
+                cpu,
+                per_step,
+                report.grants,
+            )
     return report
 
 
@@ -198,12 +210,30 @@ def run_replica_command(
         step_ms=step_ms,
     )
     previous = {s: signal.signal(s, _on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
+    code: ExitCode | None = None
     try:
         result, _ = run_replica(opts)
     except Interrupted as e:
         result = ReplicaResult(index=replica, seed=seed or 0, verdict=Verdict.ERROR, reason=str(e))
+    except BadInput as e:
+        # the test (or an option) is wrong: nothing flew; still leave a result where one is expected
+        log.error("%s", e)
+        result = ReplicaResult(index=replica, seed=seed or 0, verdict=Verdict.ERROR, reason=f"bad input: {e}")
+        code = ExitCode.BAD_INPUT
+        _store_bad_input(opts, result)
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
     print(result.model_dump_json(), flush=True)
-    return int(exit_code(result))
+    return int(code if code is not None else exit_code(result))
+
+
+def _store_bad_input(opts: RunnerOptions, result: ReplicaResult) -> None:
+    """Store result.json for a test that could not be read, when its name is known (--test-name)."""
+    if opts.test_name is None:
+        return
+    try:
+        place = ReplicaPlace(opts.namespace, opts.test_name, opts.run_id, opts.replica)
+        store_artifacts(open_store(opts.store), place, result, log_bytes=None, trajectory=None)
+    except UavTestError as e:
+        log.error("could not store result.json: %s", e)

@@ -20,7 +20,7 @@ def flight_commands(spec: UavTestSpec) -> list[Command]:
     (``mode mission`` at 0 s, which arms first, as Aerialist does)."""
     commands = resolved_commands(spec)
     if spec.mission is not None and not commands:
-        log.info("no commands: starting the mission when the flight starts")
+        log.info("no commands: mode mission at 0 s (arms first)")
         commands = [Command(at=0.0, action=CommandAction.MODE, mode=FlightMode.MISSION)]
     return commands
 

@@ -91,21 +91,9 @@ def load_config(test: Path | None, seed: int) -> SimConfig:
     """The simulator's world and boot parameters from a test file (native, manifest or Aerialist)."""
     if test is None:
         return SimConfig(seed=seed)
-    try:
-        from uavtest.spec.loaders import load_test
-    except ImportError:  # the spec loaders are not there yet: native UavTest YAML only
-        import yaml
+    from uavtest.spec.loaders import load_test
 
-        from uavtest.spec.models import UavTest
-
-        try:
-            doc = yaml.safe_load(test.read_text())
-        except FileNotFoundError:
-            raise BadInput("test file not found", file=str(test)) from None
-        uav = UavTest.model_validate(doc)
-    else:
-        uav = load_test(test)
-    return SimConfig.from_spec(uav.spec, seed)
+    return SimConfig.from_spec(load_test(test).spec, seed)
 
 
 def _bind(host: str, port: int) -> socket.socket:

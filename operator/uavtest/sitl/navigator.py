@@ -32,8 +32,8 @@ from uavtest.sitl.params import ParamStore
 __all__ = ["Event", "EventKind", "Navigator", "State"]
 
 
-SETTLE_OFFSET_MAX = 2.0  # m
-SETTLE_TAU = 3.0  # s
+SETTLE_OFFSET_MAX = 3.0  # m
+SETTLE_TAU = 4.0  # s
 
 
 class EventKind(Enum):
@@ -127,10 +127,13 @@ class Navigator:
         self._step = _Step()
         self.events.append(Event(EventKind.CURRENT, self.current))
 
-    def enter(self, nav_state: NavState, st: State, now: float, *, target_alt: float | None = None) -> None:
-        """Start flying a mode from the current state."""
+    def enter(
+        self, nav_state: NavState, st: State, now: float, *, target_alt: float | None = None,
+        hold_z: float | None = None,
+    ) -> None:
+        """Start flying a mode from the current state (a hold keeps ``hold_z`` when given)."""
         self.nav_state = nav_state
-        self._step = _Step(since=now, x=st.x, y=st.y, z=st.z, yaw=st.yaw)
+        self._step = _Step(since=now, x=st.x, y=st.y, z=st.z if hold_z is None else hold_z, yaw=st.yaw)
         if nav_state == NavState.AUTO_TAKEOFF:
             alt = target_alt if target_alt is not None else self.params["MIS_TAKEOFF_ALT"]
             self._step.z = -max(alt, self.params["MIS_TAKEOFF_ALT"])
@@ -149,7 +152,7 @@ class Navigator:
         if ns == NavState.AUTO_TAKEOFF:
             if st.landed or abs(st.z - s.z) > self.params["NAV_MC_ALT_RAD"]:
                 return self._goal_set(GoalKind.TAKEOFF, s.x, s.y, s.z, s.yaw)
-            self.events.append(Event(EventKind.HOLD))
+            self.events.append(Event(EventKind.HOLD, s.z))
             return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
         if ns == NavState.AUTO_LAND:
             return self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)

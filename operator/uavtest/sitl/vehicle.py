@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from uavtest.sitl import mav
@@ -185,9 +185,9 @@ class Vehicle:
             self.time_us = until_us
         return self.drain()
 
-    def fly_until(self, condition: object, limit_us: int) -> None:
-        """Advance in 20 ms slices until ``condition(self)`` holds or ``limit_us`` (tests, benchmarks)."""
-        assert callable(condition)
+    def fly_until(self, condition: Callable[[Vehicle], bool], within_us: int) -> None:
+        """Advance in 20 ms slices until ``condition(self)`` holds, at most ``within_us`` (tests, tools)."""
+        limit_us = self.time_us + within_us
         while self.time_us < limit_us and not condition(self):
             self.advance(self.time_us + 20_000)
             self._out.clear()
@@ -342,6 +342,8 @@ class Vehicle:
         if self.landed:
             if self.takeoff_us > self.armed_at_us:
                 if self.nav_state in AUTO_NAV_STATES:
+                    self.nav.update(self.st, t / 1e6)  # the navigator sees the landing first (finished)
+                    self._drain_nav_events()
                     if self.nav_state == NavState.AUTO_MISSION and self.nav.finished:
                         self._text(MavSeverity.INFO, "Mission finished, landed")
                     self._disarm(t, REASON_AUTO_DISARM_LAND, "Disarmed by landing")
@@ -458,14 +460,16 @@ class Vehicle:
         self._switch(ns, self.time_us)
         return MavResult.ACCEPTED
 
-    def _switch(self, ns: NavState, t: int, *, target_alt: float | None = None) -> None:
+    def _switch(
+        self, ns: NavState, t: int, *, target_alt: float | None = None, hold_z: float | None = None
+    ) -> None:
         if ns == self.nav_state and target_alt is None:
             return
         if ns == NavState.AUTO_MISSION and self.landed and self.nav.finished:
             self.nav.set_current(0)
         self.nav_state = ns
         self.nav_state_us = t
-        self.nav.enter(ns, self.st, t / 1e6, target_alt=target_alt)
+        self.nav.enter(ns, self.st, t / 1e6, target_alt=target_alt, hold_z=hold_z)
         b, e, st = self.body, self.est, self.st
         self.ctrl.reset(st.x, st.y, st.z, b.vx + e.evx, b.vy + e.evy, b.vz + e.evz, st.yaw)
         self._status_dirty = True
@@ -606,7 +610,7 @@ class Vehicle:
                 self._text(severity, text)
             elif ev.kind is EventKind.HOLD and self.nav_state == NavState.AUTO_TAKEOFF:
                 self.user_nav_state = NavState.AUTO_LOITER
-                self._switch(NavState.AUTO_LOITER, t)
+                self._switch(NavState.AUTO_LOITER, t, hold_z=float(ev.value))  # type: ignore[arg-type]
         if changed:
             self._log_mission_result()
 

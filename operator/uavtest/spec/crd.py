@@ -201,18 +201,20 @@ def _ordered(node: dict[str, Any]) -> dict[str, Any]:
 
 def _model_schema(model: type[BaseModel]) -> dict[str, Any]:
     raw = model.model_json_schema(by_alias=True, mode="validation", ref_template="#/$defs/{model}")
-    return structural_schema(raw, raw.get("$defs", {}), path=model.__name__)
+    schema = structural_schema(raw, raw.get("$defs", {}), path=model.__name__)
+    if model.__name__ in _RULES:  # the root is not reached through a $ref
+        schema["x-kubernetes-validations"] = list(_RULES[model.__name__])
+    return _ordered(schema)
 
 
 def _spec_schema() -> dict[str, Any]:
     spec = _model_schema(UavTestSpec)
-    spec.setdefault("x-kubernetes-validations", [])
     # immutability: a transition rule, checked on update only
     spec["x-kubernetes-validations"] = [
         {"rule": "self == oldSelf", "message": IMMUTABLE_MESSAGE},
-        *spec["x-kubernetes-validations"],
+        *spec.get("x-kubernetes-validations", []),
     ]
-    return spec
+    return _ordered(spec)
 
 
 def crd() -> dict[str, Any]:

@@ -130,7 +130,7 @@ def resolve_references(test: UavTest, test_file: Path | None, *, source: str | N
         plan = mission.plan
     if plan is not None:
         prefix = "" if plan_source != source else "spec.mission.plan"
-        home = plan_home(plan, plan_source)
+        home = plan_home(plan, plan_source, prefix=prefix)
         parse_plan(plan, plan_source, home_alt=(home or spec.world.home).alt, prefix=prefix)
         if home is not None and "home" not in spec.world.model_fields_set:
             s["world"]["home"] = home.dump()

@@ -98,8 +98,22 @@ def _items(doc: Mapping[str, Any], source: str) -> list[Any]:
     return items
 
 
-def plan_home(doc: Mapping[str, Any], source: str) -> Home | None:
+def plan_home(doc: Mapping[str, Any], source: str, *, prefix: str = "") -> Home | None:
     """The plan's ``plannedHomePosition`` (lat, lon, AMSL alt), or None when it has none."""
+    try:
+        return _plan_home(doc, source)
+    except BadInput as e:
+        raise _prefixed(e, prefix) from None
+
+
+def _prefixed(e: BadInput, prefix: str) -> BadInput:
+    if not prefix:
+        return e
+    field = f"{prefix}.{e.field}" if e.field else prefix
+    return BadInput(e.reason, file=e.file, field=field, value=e.value, allowed=e.allowed)
+
+
+def _plan_home(doc: Mapping[str, Any], source: str) -> Home | None:
     mission = doc.get("mission")
     raw = mission.get("plannedHomePosition") if isinstance(mission, Mapping) else None
     if raw is None:
@@ -136,10 +150,7 @@ def parse_plan(
     try:
         return _parse_plan(doc, source, home_alt=home_alt, warn=warn, prefix=prefix)
     except BadInput as e:
-        if not prefix:
-            raise
-        field = f"{prefix}.{e.field}" if e.field else prefix
-        raise BadInput(e.reason, file=e.file, field=field, value=e.value, allowed=e.allowed) from None
+        raise _prefixed(e, prefix) from None
 
 
 def _parse_plan(

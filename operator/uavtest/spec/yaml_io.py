@@ -61,6 +61,18 @@ def _represent_list(dumper: _Dumper, data: list[Any]) -> yaml.Node:
 
 _Dumper.add_representer(list, _represent_list)
 
+# YAML 1.1 readers (Go's sigs.k8s.io/yaml in kubectl, among others) read a bare y / n as a boolean;
+# PyYAML does not, so it would write them bare. Quote them (obstacle and waypoint field "y").
+_YAML11_BOOLEANS = {"y", "Y", "n", "N"}
+
+
+def _represent_str(dumper: _Dumper, data: str) -> yaml.Node:
+    style = "'" if data in _YAML11_BOOLEANS else None
+    return dumper.represent_scalar("tag:yaml.org,2002:str", data, style=style)
+
+
+_Dumper.add_representer(str, _represent_str)
+
 
 def dump_yaml(document: dict[str, Any]) -> str:
     """YAML of a plain dict, keys in the order given; short scalar lists inline."""

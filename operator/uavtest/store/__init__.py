@@ -9,7 +9,6 @@ from uavtest.store.errors import ArtifactNotFound, StoreUnavailable
 from uavtest.store.layout import aggregate_key, replica_key
 from uavtest.store.local import LocalStore
 from uavtest.store.open import open_store
-from uavtest.store.settings import S3Settings
 
 __all__ = [
     "ArtifactNotFound",
@@ -25,9 +24,13 @@ __all__ = [
 
 
 def __getattr__(name: str) -> object:
-    # S3Store pulls in minio and urllib3: import it only when asked for
+    # S3 pulls in minio, urllib3 and pydantic-settings: import it only when asked for
     if name == "S3Store":
         from uavtest.store.s3 import S3Store
 
         return S3Store
+    if name == "S3Settings":
+        from uavtest.store.settings import S3Settings
+
+        return S3Settings
     raise AttributeError(name)

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 from urllib.parse import unquote, urlsplit
 
 from uavtest.errors import BadInput
 from uavtest.store.base import ArtifactStore
 from uavtest.store.local import LocalStore
-from uavtest.store.settings import S3Settings
+
+if TYPE_CHECKING:  # pydantic-settings and minio load only for S3 stores
+    from uavtest.store.settings import S3Settings
 
 __all__ = ["open_store"]
 

@@ -47,3 +47,34 @@ def test_an_unfinished_log_is_named_in_the_error(tmp_path: Path) -> None:
 def test_no_log_at_all_is_a_bench_error(tmp_path: Path) -> None:
     with pytest.raises(LogMissing, match=r"no \.ulg in"):
         wait_for_log(tmp_path / "missing", timeout_s=0.05)
+
+
+def test_a_px4_log_in_a_dated_folder_is_taken_once_it_stops_growing(tmp_path: Path) -> None:
+    dated = tmp_path / "log" / "2024-05-01"
+    dated.mkdir(parents=True)
+    log = dated / "12_00_00.ulg"
+    log.write_bytes(b"ULog" * 100)
+    assert wait_for_log(tmp_path / "log", timeout_s=10, settle_s=0.1) == log
+
+
+def test_a_px4_log_that_keeps_growing_is_not_taken(tmp_path: Path) -> None:
+    dated = tmp_path / "2024-05-01"
+    dated.mkdir()
+    log = dated / "12_00_00.ulg"
+    stop = threading.Event()
+
+    def keep_writing() -> None:
+        with log.open("ab") as f:
+            while not stop.is_set():
+                f.write(b"x" * 64)
+                f.flush()
+                stop.wait(0.01)
+
+    t = threading.Thread(target=keep_writing)
+    t.start()
+    try:
+        with pytest.raises(LogMissing, match="still being written"):
+            wait_for_log(tmp_path, timeout_s=0.5, settle_s=0.3)
+    finally:
+        stop.set()
+        t.join()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -125,6 +126,23 @@ def test_crd_names_subresources_and_columns() -> None:
 def test_spec_is_immutable() -> None:
     rules = _schema()["properties"]["spec"]["x-kubernetes-validations"]
     assert {"rule": "self == oldSelf", "message": IMMUTABLE_MESSAGE} in rules
+
+
+def test_cross_field_rules_mirror_the_model_validators() -> None:
+    spec = _schema()["properties"]["spec"]
+    rules = {r["message"]: r["rule"] for r in spec["x-kubernetes-validations"]}
+    assert "has(self.mission)" in rules["a test needs a mission or commands (or both)"]
+    mission = spec["properties"]["mission"]
+    assert [r["message"] for r in mission["x-kubernetes-validations"]] == [
+        "give exactly one of plan, planFile, waypoints"
+    ]
+
+
+def test_committed_yaml_quotes_what_yaml_1_1_reads_as_booleans(repo_root: Path) -> None:
+    # kubectl (Go, YAML 1.1) reads a bare y as true: the obstacle field y must stay a string
+    text = (repo_root / "crds" / "uavtest.yaml").read_text()
+    assert re.search(r"^\s*y:", text, re.MULTILINE) is None and "[x, y" not in text
+    assert "'y':" in text and "[x, 'y']" in text
 
 
 # ------------------------------------------------------------------ the schema agrees with the models

@@ -108,3 +108,10 @@ def test_render_command_prints_yaml_for_kubectl(shared_data: Path, uavtest) -> N
     assert doc["metadata"] == {"name": "m3-run", "namespace": "uav"}
     assert [i["command"] for i in doc["spec"]["mission"]["plan"]["mission"]["items"]] == [22, 16, 16, 21]
     assert doc["spec"]["vehicle"]["params"]["NAV_ACC_RAD"] == 0.5
+
+
+def test_rendered_yaml_is_safe_for_yaml_1_1_readers(shared_data: Path) -> None:
+    # kubectl reads YAML 1.1, where a bare y is a boolean: obstacle positions must keep their "y"
+    text = dump_yaml(render(load_test(shared_data / "aerialist" / "samples" / "tests" / "mission1.yaml")))
+    assert "'y': 3.0" in text
+    assert yaml.safe_load(text)["spec"]["world"]["obstacles"][0]["position"]["y"] == 3.0
