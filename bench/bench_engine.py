@@ -9,6 +9,7 @@ PX4 v1.15 SIH on this 2-core machine (issue 3): at most ~18x real time (speed fa
 Targets: (a) >= 50x, aim 300x; (b) >= 1,500 flights/h, aim 5,000.
 
     python bench/bench_engine.py [--replicas 40] [--single-runs 3] [--jobs J] [--test FILE]
+                                 [--launch fork|exec|both] [--skip-throughput]
 """
 
 from __future__ import annotations
@@ -31,11 +32,12 @@ PX4_SIH_RTF = 18.0
 PX4_SIH_FLIGHTS_PER_HOUR = 520.0
 
 
-def uavtest_run(test: Path, out: Path, *args: str) -> tuple[dict, float, int]:
+def uavtest_run(test: Path, out: Path, *args: str, launch: str = "fork") -> tuple[dict, float, int]:
     """Run ``uavtest run --json``; the summary, the wall seconds and the exit code."""
     cmd = [sys.executable, "-m", "uavtest.cli", "run", str(test), "--out", str(out), "--json", *args]
+    env = {**os.environ, "UAVTEST_LAUNCH": launch}
     start = time.perf_counter()
-    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False, env=env)
     wall = time.perf_counter() - start
     if proc.returncode not in (0, 1):
         sys.stderr.write(proc.stderr[-3000:])
@@ -43,37 +45,42 @@ def uavtest_run(test: Path, out: Path, *args: str) -> tuple[dict, float, int]:
     return json.loads(proc.stdout), wall, proc.returncode
 
 
-def single_replica(test: Path, runs: int) -> None:
-    print(f"(a) one replica, runner in the loop, {test.name}, {runs} run(s)")
+def single_replica(test: Path, runs: int, launch: str) -> None:
+    how = {"fork": "forked from a fresh fork server", "exec": "both processes exec'd cold"}[launch]
+    print(f"(a) one replica, runner in the loop, {test.name}, {runs} run(s), UAVTEST_LAUNCH={launch} ({how})")
     command_rtf, replica_rtf = [], []
     for k in range(runs):
         with tempfile.TemporaryDirectory(prefix="uavtest-bench-") as tmp:
-            summary, wall, _ = uavtest_run(test, Path(tmp), "--replicas", "1", "--seed", str(k))
+            args = ("--replicas", "1", "--seed", str(k))
+            summary, wall, _ = uavtest_run(test, Path(tmp), *args, launch=launch)
         result = summary["results"][0]
         sim = result.get("sim_time") or 0.0
-        flight = (result.get("metrics") or {}).get("flight_time")
+        flight = (result.get("metrics") or {}).get("flight_time") or 0.0
         replica_wall = result.get("wall_time") or wall
         command_rtf.append(sim / wall)
         replica_rtf.append(sim / replica_wall)
         print(
-            f"    run {k}: {result['verdict']}, simulated {sim:.1f} s (flight {flight} s), "
+            f"    run {k}: {result['verdict']}, simulated {sim:.1f} s (flight {flight:.1f} s), "
             f"replica wall {replica_wall:.2f} s, whole command {wall:.2f} s"
         )
     print(
-        f"    real-time factor, replica (sitl + runner start-up to verdict): "
+        f"    real-time factor, replica (processes started -> verdict stored): "
         f"{statistics.median(replica_rtf):.0f}x   [target >= 50x, aim 300x; PX4 SIH <= {PX4_SIH_RTF:.0f}x]"
     )
     print(
-        f"    real-time factor, whole `uavtest run` (incl. aggregation, plot): "
+        f"    real-time factor, whole `uavtest run` (+ CLI start, aggregation, plot): "
         f"{statistics.median(command_rtf):.0f}x"
     )
 
 
-def throughput(test: Path, replicas: int, jobs: int | None) -> None:
+def throughput(test: Path, replicas: int, jobs: int | None, launch: str) -> None:
     extra = ["--jobs", str(jobs)] if jobs else []
-    print(f"(b) uavtest run --replicas {replicas} {' '.join(extra)} on {test.name}, {os.cpu_count()} cores")
+    print(
+        f"(b) uavtest run --replicas {replicas} {' '.join(extra)} on {test.name}, "
+        f"{os.cpu_count()} cores, UAVTEST_LAUNCH={launch}"
+    )
     with tempfile.TemporaryDirectory(prefix="uavtest-bench-") as tmp:
-        summary, wall, code = uavtest_run(test, Path(tmp), "--replicas", str(replicas), *extra)
+        summary, wall, code = uavtest_run(test, Path(tmp), "--replicas", str(replicas), *extra, launch=launch)
     sim = sum(r.get("sim_time") or 0.0 for r in summary["results"])
     per_hour = replicas / wall * 3600.0
     print(
@@ -94,12 +101,19 @@ def main() -> None:
     parser.add_argument("--single-runs", type=int, default=3)
     parser.add_argument("--jobs", type=int, default=None)
     parser.add_argument("--skip-throughput", action="store_true")
+    parser.add_argument(
+        "--launch", choices=["fork", "exec", "both"], default="both", help="how replica processes start"
+    )
     args = parser.parse_args()
     if not args.test.is_file():
         raise SystemExit(f"{args.test} not found (set UAVTEST_SHARED_DATA to the real data folder)")
-    single_replica(args.test, args.single_runs)
+    launches = ["fork", "exec"] if args.launch == "both" else [args.launch]
+    print(f"load average before: {' '.join(f'{x:.1f}' for x in os.getloadavg())} (other work on the machine)")
+    for launch in launches:
+        single_replica(args.test, args.single_runs, launch)
     if not args.skip_throughput:
-        throughput(args.test, args.replicas, args.jobs)
+        for launch in launches:
+            throughput(args.test, args.replicas, args.jobs, launch)
 
 
 if __name__ == "__main__":

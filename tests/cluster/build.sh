@@ -7,6 +7,7 @@ set -euo pipefail
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 
 mkdir -p "$BIN" "$SHARE" "$CACHE/src" "$CACHE/deb"
+exec 9>"$CACHE/.build.lock"; flock 9   # concurrent test sessions share the cache: one build at a time
 STEPS=("$@"); [ ${#STEPS[@]} -gt 0 ] || STEPS=(k8s etcd kwok minio pause debs)
 
 # stamp_ok NAME KEY FILE... : true when every FILE exists and the stamp of NAME reads KEY

@@ -7,5 +7,8 @@ D=${1:?usage: down.sh DIR [--purge]}
 [ -d "$D" ] || exit 0
 D=$(cd "$D" && pwd)
 for n in kopf kwok scheduler kcm apiserver etcd; do stop_pidfile "$D/$n.pid"; done
+# kube-controller-manager of older runs (before --flex-volume-plugin-dir) made this on the host
+for d in /usr/libexec/kubernetes/kubelet-plugins/volume/exec /usr/libexec/kubernetes/kubelet-plugins/volume \
+         /usr/libexec/kubernetes/kubelet-plugins /usr/libexec/kubernetes; do rmdir "$d" 2>/dev/null || true; done
 if [ "${2:-}" = --purge ]; then rm -rf "$D"; fi
 log "control plane down: $D"

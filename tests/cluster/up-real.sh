@@ -20,6 +20,27 @@ K() { "$BIN/kubectl" --kubeconfig="$D/kubeconfig" "$@"; }
 t0=$(now)
 fail() { log "$1"; for f in "$D/logs/containerd.log" "$D/logs/kubelet.log"; do echo "--- $f" >&2; tail -n 30 "$f" >&2; done; exit 1; }
 
+# one real node per host: test sessions sharing the machine take turns (UAVTEST_REAL_NODE_WAIT seconds at most)
+owner_alive() {   # owner_alive DIR UP_REAL_PID : is that cluster's up-real.sh, containerd or kubelet running?
+  kill -0 "$2" 2>/dev/null && return 0
+  for n in kubelet containerd; do [ -f "$1/$n.pid" ] && kill -0 "$(cat "$1/$n.pid")" 2>/dev/null && return 0; done
+  return 1
+}
+claim_node() {
+  local lockdir=/run/lock; [ -d $lockdir ] || lockdir=/run
+  exec 8<"$lockdir"; flock 8   # short critical section; locks the directory, so no lock file is left behind
+  local other="" opid=""
+  [ -f "$REAL_NODE_OWNER" ] && read -r other opid < "$REAL_NODE_OWNER"
+  if [ -n "$other" ] && [ "$other" != "$D" ] && owner_alive "$other" "$opid"; then exec 8<&-; return 1; fi
+  echo "$D $$" > "$REAL_NODE_OWNER"; exec 8<&-
+}
+waited=0
+until claim_node; do
+  [ $waited = 0 ] && log "another real-node cluster runs on this host ($(cat "$REAL_NODE_OWNER")): waiting"
+  (( waited += 2 )); sleep 2
+  (( waited < ${UAVTEST_REAL_NODE_WAIT:-900} )) || { log "gave up waiting for the real node after ${waited}s"; exit 1; }
+done
+
 # what down-real.sh must restore or leave alone: kubelet tunes these sysctls on start
 {
   echo "BRIDGE=$BR"
@@ -27,7 +48,6 @@ fail() { log "$1"; for f in "$D/logs/containerd.log" "$D/logs/kubelet.log"; do e
            kernel/keys/root_maxbytes; do
     [ -r "/proc/sys/$s" ] && echo "SYSCTL $s $(cat "/proc/sys/$s")"
   done
-  for n in /run/netns/*; do [ -e "$n" ] && echo "NETNS $n"; done
 } > "$D/host-state.txt"
 
 mkdir -p "$C/cni" "$C/ipam" "$KL" "$D/logs"

@@ -48,7 +48,7 @@ wait_for 90 K get --raw=/readyz || fail "kube-apiserver not ready after 90 s"
 
 "$BIN/kube-controller-manager" --kubeconfig="$D/kubeconfig" --bind-address=127.0.0.1 --secure-port="$KCM_PORT" \
   --leader-elect=false --service-account-private-key-file="$P/sa.key" --root-ca-file="$P/ca.crt" \
-  --use-service-account-credentials=false --profiling=false \
+  --use-service-account-credentials=false --profiling=false --flex-volume-plugin-dir="$D/kcm-flexvolume" \
   </dev/null >"$D/logs/kcm.log" 2>&1 &
 echo $! > "$D/kcm.pid"
 "$BIN/kube-scheduler" --kubeconfig="$D/kubeconfig" --bind-address=127.0.0.1 --secure-port="$SCHEDULER_PORT" \

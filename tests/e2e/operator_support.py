@@ -48,11 +48,9 @@ def store_secret(cluster: Cluster, namespace: str, minio: MinioServer) -> None:
 
 
 def least_privilege_kubeconfig(cluster: Cluster, namespace: str, out: Path) -> Path:
-    """A kubeconfig for a ServiceAccount bound to the chart's rules only (Role in NAMESPACE + CRD reads)."""
+    """A kubeconfig for a ServiceAccount bound to the chart's rules only (a Role in NAMESPACE)."""
     namespaced = yaml.safe_load((RBAC / "namespaced-rules.yaml").read_text())
-    cluster_rules = yaml.safe_load((RBAC / "cluster-rules.yaml").read_text())
     subject = [{"kind": "ServiceAccount", "name": SA, "namespace": namespace}]
-    crd_role = f"uavtest-crds-{namespace}"
     rbac = "rbac.authorization.k8s.io"
     cluster.apply(
         {"apiVersion": "v1", "kind": "ServiceAccount", "metadata": {"name": SA, "namespace": namespace}},
@@ -67,19 +65,6 @@ def least_privilege_kubeconfig(cluster: Cluster, namespace: str, out: Path) -> P
             "kind": "RoleBinding",
             "metadata": {"name": SA, "namespace": namespace},
             "roleRef": {"apiGroup": rbac, "kind": "Role", "name": SA},
-            "subjects": subject,
-        },
-        {
-            "apiVersion": f"{rbac}/v1",
-            "kind": "ClusterRole",
-            "metadata": {"name": crd_role},
-            "rules": cluster_rules,
-        },
-        {
-            "apiVersion": f"{rbac}/v1",
-            "kind": "ClusterRoleBinding",
-            "metadata": {"name": crd_role},
-            "roleRef": {"apiGroup": rbac, "kind": "ClusterRole", "name": crd_role},
             "subjects": subject,
         },
     )

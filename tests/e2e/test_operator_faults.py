@@ -10,7 +10,8 @@ from typing import Any
 
 import pytest
 import yaml
-from operator_support import (
+
+from e2e.operator_support import (
     Operator,
     install_crd,
     least_privilege_kubeconfig,
@@ -20,7 +21,6 @@ from operator_support import (
     wait_complete,
     wait_status,
 )
-
 from harness.cluster import REPO_ROOT, Cluster
 from harness.minio import MinioServer
 
@@ -60,7 +60,9 @@ def operator(
     )
     op.start()
     yield op
-    cluster.kubectl("delete", "uavtests", "--all", "-n", namespace, "--timeout=120s", check=False, timeout=150)
+    cluster.kubectl(
+        "delete", "uavtests", "--all", "-n", namespace, "--timeout=120s", check=False, timeout=150
+    )
     op.stop()
 
 

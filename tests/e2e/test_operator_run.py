@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pytest
 import yaml
-from operator_support import (
+
+from e2e.operator_support import (
     Operator,
     install_crd,
     least_privilege_kubeconfig,
@@ -23,7 +24,6 @@ from operator_support import (
     store_secret,
     wait_complete,
 )
-
 from harness.cluster import REPO_ROOT, Cluster, KubectlError
 from harness.minio import MinioServer
 
@@ -64,22 +64,26 @@ def operator(
     op.start()
     yield op
     # delete the tests while the operator still runs: it removes its finalizer from them
-    cluster.kubectl("delete", "uavtests", "--all", "-n", namespace, "--timeout=120s", check=False, timeout=150)
+    cluster.kubectl(
+        "delete", "uavtests", "--all", "-n", namespace, "--timeout=120s", check=False, timeout=150
+    )
     op.stop()
     forbidden = [line for line in op.log_text().splitlines() if "403" in line or "forbidden" in line.lower()]
     assert not forbidden, f"the chart's RBAC misses a call: {forbidden[:5]}"
 
 
 def apply_example(cluster: Cluster, namespace: str, name: str) -> str:
+    """kubectl apply an example as JSON (the examples are YAML 1.2; kubectl reads a bare `y:` as true)."""
     doc = yaml.safe_load((EXAMPLES / name).read_text())
-    cluster.kubectl("apply", "-n", namespace, "-f", str(EXAMPLES / name))
+    cluster.kubectl("apply", "-n", namespace, "-f", "-", input=json.dumps(doc))
     return str(doc["metadata"]["name"])
 
 
 def test_example_flies_in_parallel_pods_and_reports(
     cluster: Cluster, namespace: str, operator: Operator, minio: MinioServer, bucket: str
 ) -> None:
-    name = apply_example(cluster, namespace, "uavtest.yaml")
+    cluster.kubectl("apply", "-n", namespace, "-f", str(EXAMPLES / "uavtest.yaml"))  # the file as is
+    name = yaml.safe_load((EXAMPLES / "uavtest.yaml").read_text())["metadata"]["name"]
     status = wait_complete(cluster, namespace, name)
     log = operator.log_text()[-4000:]
     assert status["phase"] == "Succeeded", (status, log)

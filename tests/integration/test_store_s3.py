@@ -27,7 +27,8 @@ pytestmark = pytest.mark.integration
 READY_S = 60.0
 
 
-def _binary() -> Path:
+def minio_binary_or_skip() -> Path:
+    """The built MinIO binary; skips the test when it is not built."""
     try:
         return minio_binary(build=False)
     except MinioError as e:
@@ -36,7 +37,7 @@ def _binary() -> Path:
 
 @pytest.fixture
 def minio(tmp_path: Path) -> Iterator[MinioServer]:
-    _binary()
+    minio_binary_or_skip()
     server = start_minio(tmp_path / "minio")  # a root of our own: its data survives a stop
     try:
         yield server
@@ -71,7 +72,14 @@ def restart_same(server: MinioServer) -> subprocess.Popen[bytes]:
         "MINIO_UPDATE": "off",
         "HOME": str(server.root),
     }
-    cmd = [str(_binary()), "server", str(server.root / "data"), "--address", server.endpoint, "--quiet"]
+    cmd = [
+        str(minio_binary_or_skip()),
+        "server",
+        str(server.root / "data"),
+        "--address",
+        server.endpoint,
+        "--quiet",
+    ]
     cmd += ["--certs-dir", str(server.root / "certs")]
     with open(server.root / "minio-restart.log", "wb") as log:
         proc = subprocess.Popen(cmd, env=env, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
@@ -85,14 +93,17 @@ def restart_same(server: MinioServer) -> subprocess.Popen[bytes]:
 
 
 class _RetrySeen(logging.Handler):
-    def __init__(self) -> None:
+    """Sets ``event`` once ``wanted`` retries have been logged."""
+
+    def __init__(self, wanted: int) -> None:
         super().__init__()
+        self.wanted = wanted
         self.event = threading.Event()
         self.messages: list[str] = []
 
     def emit(self, record: logging.LogRecord) -> None:
         self.messages.append(record.getMessage())
-        if "retry" in record.getMessage():
+        if sum("retry" in m for m in self.messages) >= self.wanted:
             self.event.set()
 
 
@@ -135,7 +146,7 @@ def test_an_upload_during_an_outage_retries_and_arrives_when_minio_is_back(minio
     minio.stop()  # our own root: the data dir stays
     assert not _live(minio.endpoint)
 
-    seen = _RetrySeen()
+    seen = _RetrySeen(wanted=4)  # MinIO stays down through 4 retries (backoff 0.2 s doubling: a few s)
     logger = logging.getLogger("uavtest.store.s3")
     logger.addHandler(seen)
     logger.setLevel(logging.INFO)
@@ -153,7 +164,7 @@ def test_an_upload_during_an_outage_retries_and_arrives_when_minio_is_back(minio
     thread.start()
     restarted = None
     try:
-        assert seen.event.wait(30), "the upload never retried"
+        assert seen.event.wait(60), "the upload did not keep retrying"
         assert thread.is_alive()  # still retrying while MinIO is down
         restarted = restart_same(minio)
         thread.join(90)
@@ -168,7 +179,7 @@ def test_an_upload_during_an_outage_retries_and_arrives_when_minio_is_back(minio
             restarted.terminate()
             restarted.wait(10)
     retries = [m for m in seen.messages if "retry" in m]
-    assert retries and all("ns/t/r/replica-0/flight.ulg" in m for m in retries)
+    assert len(retries) >= 4 and all("ns/t/r/replica-0/flight.ulg" in m for m in retries)
     assert not any(minio.secret_key in m or minio.access_key in m for m in seen.messages)
 
 

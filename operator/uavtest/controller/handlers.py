@@ -46,6 +46,9 @@ def configure(
         prefix=names.PROGRESS_PREFIX, key="last-handled-configuration"
     )
     settings.posting.level = logging.WARNING  # Events only for warnings: no event per handler run
+    # Serve the resources and namespaces found at start-up; do not watch CRDs and namespaces (which
+    # would need cluster-wide read access): the chart installs the CRD before the operator starts.
+    settings.scanning.disabled = True
     config = memo.get("config") or OperatorSettings()
 
     def tests() -> list[UavTestView]:

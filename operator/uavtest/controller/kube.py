@@ -17,7 +17,9 @@ from uavtest.controller import names
 
 __all__ = ["API_CALLS", "Kube", "api_client"]
 
-# (apiGroup, resource, verb) of every request the operator sends, kopf's included.
+# (apiGroup, resource, verb) of every request the operator sends, kopf's included. kopf's scanning of
+# CRDs and namespaces is off (see handlers.configure), so it needs no cluster-wide reads; API
+# discovery (GET /api, /apis) is open to every authenticated user.
 API_CALLS: frozenset[tuple[str, str, str]] = frozenset(
     {
         # kopf: watch the custom resources, keep its progress annotations and finalizer on them
@@ -29,9 +31,6 @@ API_CALLS: frozenset[tuple[str, str, str]] = frozenset(
         # kopf.adopt sets blockOwnerDeletion on children: clusters that enforce owner references
         # (OwnerReferencesPermissionEnforcement) require update on the owner's finalizers
         (names.API_GROUP, f"{names.PLURAL}/finalizers", "update"),
-        # kopf: discover and follow CRD changes (read-only)
-        ("apiextensions.k8s.io", "customresourcedefinitions", "list"),
-        ("apiextensions.k8s.io", "customresourcedefinitions", "watch"),
         # children
         ("batch", "jobs", "list"),
         ("batch", "jobs", "watch"),

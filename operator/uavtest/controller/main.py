@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import logging
+import re
 from collections.abc import Sequence
 
 import kopf
@@ -9,6 +11,15 @@ import kopf
 from uavtest.controller.settings import OperatorSettings
 
 __all__ = ["run_operator"]
+
+# kopf reports every handler call at INFO; for the per-event handlers that is one line per pod
+# event. Without --verbose those lines are dropped (failures are still logged at ERROR).
+_ROUTINE = re.compile(r"^Handler '(pod_changed|job_changed|forget_deleted)' succeeded")
+
+
+class _QuietRoutine(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not _ROUTINE.match(record.getMessage())
 
 
 def run_operator(
@@ -29,7 +40,11 @@ def run_operator(
     config = OperatorSettings()
     if metrics_port is not None:
         config = config.model_copy(update={"metrics_port": metrics_port})
+    logging.getLogger().handlers.clear()  # kopf installs its own handler: no duplicate lines
     kopf.configure(verbose=verbose)
+    if not verbose:
+        for handler in logging.getLogger().handlers:
+            handler.addFilter(_QuietRoutine())
     kopf.run(
         standalone=True,
         clusterwide=not namespaces,

@@ -56,6 +56,7 @@ class Book:
     status: dict[str, Any] | None = None  # the last status this operator wrote
     job_deleted: bool = False  # the run's Job was deleted before the run finished
     final: bool = False  # the final status is written: nothing changes it any more
+    aggregation_error: str | None = None  # why the last aggregation failed (cleared on success)
 
 
 class Books:
@@ -219,7 +220,12 @@ def sync_run(
         previous = book.status if book.status is not None else test.status
         current = test.model_copy(update={"status": previous})
         status = status_from(
-            current, job, list(pods), store_url=rt.config.store_url, job_deleted=book.job_deleted
+            current,
+            job,
+            list(pods),
+            store_url=rt.config.store_url,
+            job_deleted=book.job_deleted,
+            aggregation_error=book.aggregation_error,
         )
         _write(rt, book, test, status)
 
@@ -254,6 +260,7 @@ def aggregate(
         except UavTestError as e:
             rt.metrics.reconcile_errors.labels(handler="aggregate").inc()
             logger.warning(f"aggregation failed, will retry: {e}")
+            book.aggregation_error = str(e)
             status = status_from(
                 current,
                 job,
@@ -272,6 +279,7 @@ def aggregate(
         )
         _write(rt, book, view, status)
         book.final = True
+        book.aggregation_error = None
     rt.metrics.record_run(summary, status.phase.value.lower())
     logger.info(f"run {view.run_id} aggregated: {status.message}")
     for ev in events_for(summary, status.phase):

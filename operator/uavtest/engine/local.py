@@ -6,6 +6,7 @@ Artifacts go to a ``LocalStore`` under ``--out`` with the object-store layout (n
 
 from __future__ import annotations
 
+import importlib
 import os
 import secrets
 import threading
@@ -13,7 +14,7 @@ from concurrent.futures import Future, ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field
@@ -24,10 +25,12 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from uavtest.analysis.models import ReplicaResult, RunSummary
+from uavtest.engine.launch import ExecLauncher, Launcher, WarmLauncher
 from uavtest.engine.ports import PX4_MAX_INSTANCES, PortAllocator
 from uavtest.engine.replica import DEFAULT_RETRIES, ReplicaJob, run_replica
 from uavtest.errors import BadInput
 from uavtest.spec.models import Simulator, UavTest
+from uavtest.store import ArtifactStore
 from uavtest.store.layout import aggregate_key, replica_prefix, run_prefix
 
 __all__ = [
@@ -45,11 +48,17 @@ _AERIALIST_SIMULATORS = {"ros", "gazebo", "jmavsim"}
 
 
 class EngineSettings(BaseSettings):
-    """Environment of the local engine: ``UAVTEST_PX4_BIN`` names a PX4 SITL binary."""
+    """Environment of the local engine.
+
+    ``UAVTEST_PX4_BIN`` names a PX4 SITL binary (for ``vehicle.simulator: px4``);
+    ``UAVTEST_LAUNCH`` is ``fork`` (default: replica processes forked from a warm fork server,
+    no import cost per process) or ``exec`` (each process started from scratch).
+    """
 
     model_config = SettingsConfigDict(env_prefix="UAVTEST_", extra="ignore")
 
     px4_bin: Path | None = None
+    launch: Literal["fork", "exec"] = "fork"
 
 
 class RunOptions(BaseModel):
@@ -187,7 +196,8 @@ class _Board:
 def _fly_all(
     jobs: list[ReplicaJob],
     parallel: int,
-    store: Any,
+    store: ArtifactStore,
+    launcher: Launcher,
     board: _Board,
     console: Console,
 ) -> None:
@@ -198,7 +208,15 @@ def _fly_all(
         ThreadPoolExecutor(max_workers=parallel, thread_name_prefix="replica") as pool,
     ):
         futures: list[Future[ReplicaResult]] = [
-            pool.submit(run_replica, job, ports=ports, store=store, on_status=board.set, cancel=cancel)
+            pool.submit(
+                run_replica,
+                job,
+                ports=ports,
+                store=store,
+                on_status=board.set,
+                cancel=cancel,
+                launcher=launcher,
+            )
             for job in jobs
         ]
         try:
@@ -211,6 +229,12 @@ def _fly_all(
             raise
 
 
+def _import_aggregation() -> None:
+    """Import what aggregation needs (matplotlib) while the replicas fly, not after them."""
+    for module in ("uavtest.engine.aggregate", "uavtest.analysis.plots"):
+        importlib.import_module(module)
+
+
 def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRun:
     """Fly a test's replicas locally and aggregate them; raises BadInput before flying anything."""
     from uavtest.engine.aggregate import aggregate_run
@@ -218,11 +242,13 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     from uavtest.store import LocalStore
 
     console = console or Console(stderr=True)
+    settings = EngineSettings()
+    warm = WarmLauncher() if settings.launch == "fork" else None
     test = load_test(options.test)
     notices = [n for n in [aerialist_simulator_notice(options.test)] if n]
     for n in notices:
         console.print(f"[cyan]notice:[/] {n}", highlight=False)
-    px4_bin = _px4_bin(test, EngineSettings(), options.test)
+    px4_bin = _px4_bin(test, settings, options.test)
 
     replicas = options.replicas if options.replicas is not None else test.spec.replicas
     if replicas < 1:
@@ -270,7 +296,11 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
         highlight=False,
     )
     board = _Board({j.index: j.seed for j in jobs}, {j.index: j.out_dir / "runner.stderr.log" for j in jobs})
-    _fly_all(jobs, parallel, store, board, console)
+    launcher: Launcher = warm if warm is not None and px4_bin is None else ExecLauncher()
+    if isinstance(launcher, WarmLauncher):
+        launcher.warm()
+    threading.Thread(target=_import_aggregation, name="import-aggregation", daemon=True).start()
+    _fly_all(jobs, parallel, store, launcher, board, console)
 
     summary = aggregate_run(store, NAMESPACE, name, run_id, indices, spec)
     summary_path = store.path(aggregate_key(NAMESPACE, name, run_id, "summary.json"))

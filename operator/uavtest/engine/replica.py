@@ -11,6 +11,7 @@ reason, never dropped.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import signal
@@ -26,6 +27,7 @@ from pathlib import Path
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from uavtest.analysis.models import ReplicaResult, Verdict
+from uavtest.engine.launch import ExecLauncher, Launcher, Started
 from uavtest.engine.ports import PortAllocator, ReplicaPorts
 from uavtest.errors import UavTestError
 from uavtest.spec.models import Simulator
@@ -210,17 +212,27 @@ class _AttemptEnd:
     cancelled: bool = False
 
 
-def _stop(proc: subprocess.Popen[bytes]) -> int:
-    """SIGTERM the process (its own session), SIGKILL after a grace; return its exit code."""
+def _signal(proc: Started, sig: signal.Signals) -> None:
+    """Signal the process's session (it is a session leader), else the process itself."""
     if proc.poll() is not None:
-        return proc.returncode
-    for sig, grace in ((signal.SIGTERM, STOP_GRACE), (signal.SIGKILL, STOP_GRACE)):
+        return
+    try:
+        os.killpg(proc.pid, sig)
+        return
+    except ProcessLookupError:
+        pass  # a forked process may not have called setsid yet
+    with contextlib.suppress(ProcessLookupError):
+        os.kill(proc.pid, sig)
+
+
+def _stop(proc: Started) -> int:
+    """SIGTERM the process, SIGKILL after a grace; return its exit code."""
+    if (code := proc.poll()) is not None:
+        return code
+    for sig in (signal.SIGTERM, signal.SIGKILL):
+        _signal(proc, sig)
         try:
-            os.killpg(proc.pid, sig)
-        except ProcessLookupError:
-            break
-        try:
-            return proc.wait(timeout=grace)
+            return proc.wait(timeout=STOP_GRACE)
         except subprocess.TimeoutExpired:
             continue
     return proc.wait()
@@ -241,67 +253,52 @@ def _fly(
     files: _AttemptFiles,
     attempt: int,
     job: ReplicaJob,
+    launcher: Launcher,
     cancel: threading.Event,
 ) -> _AttemptEnd:
     """Start runner and simulator, wait for the runner, stop the simulator."""
-    header = f"--- attempt {attempt} ---\n".encode()
-    with (
-        files.runner_out.open("ab") as r_out,
-        files.runner_err.open("ab") as r_err,
-        files.sim_err.open("ab") as s_err,
-    ):
-        for f in (r_out, r_err, s_err):
-            f.write(header)
-            f.flush()
-        # The runner binds the API port; start it first so the simulator's first packets land.
-        runner = subprocess.Popen(
-            plan.runner, stdin=subprocess.DEVNULL, stdout=r_out, stderr=r_err, start_new_session=True
-        )
-        try:
-            sim = subprocess.Popen(
-                plan.sim,
-                stdin=subprocess.DEVNULL,
-                stdout=subprocess.DEVNULL,
-                stderr=s_err,
-                cwd=plan.sim_cwd,
-                env=plan.sim_env,
-                start_new_session=True,
-            )
-        except OSError as e:
+    for path in (files.runner_out, files.runner_err, files.sim_err):
+        with path.open("a") as f:
+            f.write(f"--- attempt {attempt} ---\n")
+    # The runner binds the API port; start it first so the simulator's first packets land.
+    runner = launcher.start(plan.runner, stdout=files.runner_out, stderr=files.runner_err)
+    try:
+        sim = launcher.start(plan.sim, stdout=None, stderr=files.sim_err, cwd=plan.sim_cwd, env=plan.sim_env)
+    except OSError as e:
+        _stop(runner)
+        return _AttemptEnd(None, None, note=f"cannot start the simulator {plan.sim[0]}: {e}")
+    end = _AttemptEnd(None, None)
+    deadline = time.monotonic() + job.wall_timeout
+    sim_died_at: float | None = None
+    try:
+        while True:
+            try:
+                end.runner_code = runner.wait(timeout=POLL)
+                break
+            except subprocess.TimeoutExpired:
+                pass
+            now = time.monotonic()
+            if cancel.is_set():
+                end.cancelled, end.note = True, "cancelled"
+                end.runner_code = _stop(runner)
+                break
+            if sim_died_at is None and sim.poll() not in (None, 0):
+                sim_died_at = now
+            if sim_died_at is not None and now - sim_died_at > job.sim_death_grace:
+                end.note = f"simulator exited with code {sim.poll()}: {_tail(files.sim_err)}"
+                end.runner_code = _stop(runner)
+                break
+            if now > deadline:
+                end.note = f"replica did not finish within {job.wall_timeout:g} s wall time"
+                end.runner_code = _stop(runner)
+                break
+    finally:
+        if runner.poll() is None:
             _stop(runner)
-            return _AttemptEnd(None, None, note=f"cannot start the simulator {plan.sim[0]}: {e}")
-        end = _AttemptEnd(None, None)
-        deadline = time.monotonic() + job.wall_timeout
-        sim_died_at: float | None = None
-        try:
-            while True:
-                try:
-                    end.runner_code = runner.wait(timeout=POLL)
-                    break
-                except subprocess.TimeoutExpired:
-                    pass
-                now = time.monotonic()
-                if cancel.is_set():
-                    end.cancelled, end.note = True, "cancelled"
-                    end.runner_code = _stop(runner)
-                    break
-                if sim_died_at is None and sim.poll() not in (None, 0):
-                    sim_died_at = now
-                if sim_died_at is not None and now - sim_died_at > job.sim_death_grace:
-                    end.note = f"simulator exited with code {sim.returncode}: {_tail(files.sim_err)}"
-                    end.runner_code = _stop(runner)
-                    break
-                if now > deadline:
-                    end.note = f"replica did not finish within {job.wall_timeout:g} s wall time"
-                    end.runner_code = _stop(runner)
-                    break
-        finally:
-            if runner.poll() is None:
-                _stop(runner)
-            sim_alive = sim.poll() is None
-            end.sim_code = _stop(sim)
-            if not sim_alive and end.sim_code not in (0, None):
-                end.sim_note = f"simulator exited with code {end.sim_code}: {_tail(files.sim_err)}"
+        sim_alive = sim.poll() is None
+        end.sim_code = _stop(sim)
+        if not sim_alive and end.sim_code not in (0, None):
+            end.sim_note = f"simulator exited with code {end.sim_code}: {_tail(files.sim_err)}"
     return end
 
 
@@ -387,6 +384,7 @@ def run_replica(
     plan: PlanBuilder = plan_processes,
     on_status: StatusCallback | None = None,
     cancel: threading.Event | None = None,
+    launcher: Launcher | None = None,
 ) -> ReplicaResult:
     """Fly one replica, retrying bench errors with the same seed; always returns a result.
 
@@ -395,6 +393,7 @@ def run_replica(
     wrote when the runner could not.
     """
     cancel = cancel or threading.Event()
+    launcher = launcher or ExecLauncher()
     status = on_status or (lambda _i, _s: None)
     job.out_dir.mkdir(parents=True, exist_ok=True)
     files = _AttemptFiles(
@@ -413,7 +412,7 @@ def run_replica(
             ports.lease(px4=job.simulator == Simulator.PX4) as p,
             tempfile.TemporaryDirectory(prefix=f"uavtest-replica-{job.index}-") as tmp,
         ):
-            end = _fly(plan(job, p, Path(tmp)), files, attempt, job, cancel)
+            end = _fly(plan(job, p, Path(tmp)), files, attempt, job, launcher, cancel)
         if end.cancelled:
             history.reasons.append("cancelled")
             break

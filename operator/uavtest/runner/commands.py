@@ -214,40 +214,42 @@ class CommandScheduler:
         c = step.command
         return [CommandLong(c.command, c.params, confirmation=self._confirmation)]
 
-    def handle_ack(self, ack: CommandAck, now_ms: int, wall: float) -> None:
+    def handle_ack(self, ack: CommandAck, now_ms: int, wall: float) -> Step | None:
+        """Take a COMMAND_ACK; returns the step it accepted (None otherwise)."""
         step = self._current
         if step is None or step.command is None or ack.command != step.command.command:
-            return
+            return None
         result = ack.result
         if result == AckResult.ACCEPTED:
             if step.kind is StepKind.MODE and step.mode in AUTO_MODES:
                 self.sticks = None
             self._done()
-            return
+            return step
         if result == AckResult.IN_PROGRESS:
             self._ack_deadline = wall + 5 * self.ack_timeout_s
-            return
+            return None
         name = result_name(AckResult, result)
         if result == AckResult.UNSUPPORTED:
             self.error = f"vehicle does not support {step.label} (COMMAND_ACK {name})"
             self._done()
-            return
+            return None
         if step.kind is StepKind.ARM:
             if self._first_refusal_ms is None:
                 self._first_refusal_ms = now_ms
             if now_ms - self._first_refusal_ms >= self.arm_give_up_ms:
-                self.error = (
-                    f"vehicle refused to arm for {self.arm_give_up_ms / 1000:g} s (COMMAND_ACK {name})"
-                )
+                given = f"{self.arm_give_up_ms / 1000:g} s"
+                self.error = f"vehicle refused to arm for {given} (COMMAND_ACK {name})"
                 self._done()
-                return
+                return None
+            log.info("vehicle refused to arm (%s); trying again in %d ms", name, self.arm_retry_ms)
             self._retry_at_ms = now_ms + self.arm_retry_ms
             self._ack_deadline = math.inf
-            return
+            return None
         note = f"t={now_ms / 1000:.2f} s: vehicle refused {step.label} (COMMAND_ACK {name})"
         log.warning(note)
         self.notes.append(note)
         self._done()
+        return None
 
     def _done(self) -> None:
         self._current = None

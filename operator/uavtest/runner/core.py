@@ -49,9 +49,11 @@ from uavtest.runner.params import ParamSetter
 from uavtest.runner.px4 import AckResult, Autopilot, Cmd, LandedState, MavType, mode_name, result_name
 from uavtest.spec.models import Command, Geofence, Obstacle
 
-__all__ = ["CoreConfig", "Ending", "FlightReport", "ReplicaCore", "Stage"]
+__all__ = ["ARM_GRACE_MS", "CoreConfig", "Ending", "FlightReport", "ReplicaCore", "Stage"]
 
 log = logging.getLogger(__name__)
+
+ARM_GRACE_MS = 1500  # vehicle ms after arming before a disarmed vehicle counts as landed
 
 
 class Stage(StrEnum):
@@ -147,6 +149,7 @@ class ReplicaCore:
         self._next_wall_heartbeat = 0.0
         self._last_hb_ms = -math.inf
         self._settle_tries = 0
+        self._armed_at_ms = -math.inf  # vehicle time the vehicle was last seen arming
 
     # ------------------------------------------------------------------ public
 
@@ -265,6 +268,8 @@ class ReplicaCore:
             state = "armed" if hb.armed else "disarmed"
             log.info("vehicle %d/%d: %s, %s", hb.sysid, hb.compid, mode_name(hb.custom_mode), state)
         self.report.vehicle = hb
+        if hb.armed and not self.armed:
+            self._armed_at_ms = self.now_ms
         self.armed = hb.armed
         if hb.armed and self.stage is Stage.FLIGHT:
             self.report.armed_ever = True
@@ -295,7 +300,9 @@ class ReplicaCore:
             if accepted is not None and accepted.kind in (StepKind.ARM, StepKind.DISARM):
                 # the heartbeat (1 Hz) will confirm it; until then trust the ACK
                 self.armed = accepted.kind is StepKind.ARM
-                self.report.armed_ever |= self.armed
+                if self.armed:
+                    self.report.armed_ever = True
+                    self._armed_at_ms = self.now_ms
             if not self.lockstep:
                 return self._flight_step(wall)
             return []
@@ -390,7 +397,14 @@ class ReplicaCore:
                 f"collision at t={c.time_ms / 1000:.2f} s, NED ({c.x:.2f}, {c.y:.2f}, {c.z:.2f})"
             )
             return out + self._settle(Ending.COLLISION, wall)
-        if rep.armed_ever and not self.armed and self.scheduler.idle:
+        # landed: disarmed after arming, nothing left to do (a heartbeat from before the arming,
+        # arriving after its ACK, must not end the flight: hence the grace after arming)
+        if (
+            rep.armed_ever
+            and not self.armed
+            and self.scheduler.idle
+            and now - self._armed_at_ms >= ARM_GRACE_MS
+        ):
             return out + self._settle(Ending.LANDED, wall)
         assert rep.start_ms is not None
         if now - rep.start_ms >= self.cfg.timeout_s * 1000:

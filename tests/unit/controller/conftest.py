@@ -5,7 +5,8 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from controller_bodies import uavtest_body
+
+from .controller_bodies import uavtest_body
 
 
 @pytest.fixture

@@ -11,13 +11,14 @@ from typing import Any
 
 import pytest
 import yaml
-from controller_bodies import RUN, uavtest_body
 
 from uavtest.analysis.flakiness import summarize
 from uavtest.analysis.models import FlightMetrics, ReplicaResult, Verdict
 from uavtest.controller.kube import API_CALLS
 from uavtest.controller.metrics import Metrics
 from uavtest.controller.views import uavtest_view
+
+from .controller_bodies import RUN, uavtest_body
 
 CHART = Path(__file__).resolve().parents[3] / "charts" / "uavtest"
 
@@ -33,10 +34,7 @@ def granted(rules: list[dict[str, Any]]) -> set[tuple[str, str, str]]:
 
 
 def chart_rules() -> set[tuple[str, str, str]]:
-    out: set[tuple[str, str, str]] = set()
-    for name in ("namespaced-rules.yaml", "cluster-rules.yaml"):
-        out |= granted(yaml.safe_load((CHART / "files" / "rbac" / name).read_text()))
-    return out
+    return granted(yaml.safe_load((CHART / "files" / "rbac" / "namespaced-rules.yaml").read_text()))
 
 
 def test_rbac_grants_exactly_the_calls_the_operator_makes() -> None:
@@ -129,6 +127,6 @@ def test_chart_minio_toggle() -> None:
     assert {"Deployment", "Service", "Secret"} <= {
         d["kind"] for d in docs if d["metadata"]["name"] == "rel-minio"
     }
-    deploy = next(d for d in docs if d["metadata"]["name"] == "rel-operator")
+    deploy = next(d for d in docs if d["kind"] == "Deployment" and d["metadata"]["name"] == "rel-operator")
     env = {e["name"]: e for e in deploy["spec"]["template"]["spec"]["containers"][0]["env"]}
     assert env["UAVTEST_S3_ENDPOINT"]["value"] == "rel-minio.uavtest-system.svc:9000"

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import pytest
-from controller_bodies import job_body, pod_body, uavtest_body
 
 from uavtest.analysis.flakiness import summarize
 from uavtest.analysis.models import FlightMetrics, ReplicaResult, Verdict
@@ -12,6 +11,8 @@ from uavtest.controller.reconcile import parse_test
 from uavtest.controller.status import status_from
 from uavtest.controller.views import job_view, pod_view, uavtest_view
 from uavtest.errors import BadInput, ExitCode
+
+from .controller_bodies import job_body, pod_body, uavtest_body
 
 
 def final(*verdicts: Verdict) -> dict[str, object]:

@@ -11,7 +11,6 @@ from typing import Any
 import kubernetes
 import pytest
 import yaml
-from controller_bodies import RUN, UID, uavtest_body
 
 from uavtest.controller.jobs import (
     build_configmap,
@@ -27,6 +26,8 @@ from uavtest.controller.settings import OperatorSettings
 from uavtest.errors import BadInput
 from uavtest.spec.loaders import load_test_text
 from uavtest.store import S3Settings
+
+from .controller_bodies import RUN, UID, uavtest_body
 
 S3 = S3Settings(endpoint="minio.storage:9000", access_key="AKIAEXAMPLE", secret_key="s3cr3t-value")
 

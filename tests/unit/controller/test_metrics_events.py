@@ -6,7 +6,6 @@ import urllib.request
 from collections.abc import Iterator
 
 import pytest
-from controller_bodies import RUN, uavtest_body
 from prometheus_client.parser import text_string_to_metric_families
 
 from uavtest.analysis.flakiness import summarize
@@ -15,6 +14,8 @@ from uavtest.controller.events import MAX_ERROR_EVENTS, events_for
 from uavtest.controller.metrics import Metrics
 from uavtest.controller.views import UavTestView, uavtest_view
 from uavtest.spec.status import Phase
+
+from .controller_bodies import RUN, uavtest_body
 
 
 def view(name: str, status: dict[str, object]) -> UavTestView:

@@ -5,13 +5,13 @@ from __future__ import annotations
 from datetime import UTC, datetime, timedelta
 from typing import Any
 
-from controller_bodies import RUN, job_body, pod_body, uavtest_body
-
 from uavtest.analysis.flakiness import summarize
 from uavtest.analysis.models import FlightMetrics, ReplicaResult, RunSummary, Verdict
 from uavtest.controller.status import awaiting_aggregation, is_final, status_from
 from uavtest.controller.views import job_view, parse_indexes, pod_view, uavtest_view
 from uavtest.spec.status import UavTestStatus
+
+from .controller_bodies import RUN, job_body, pod_body, uavtest_body
 
 T0 = datetime(2025, 1, 1, 10, 0, tzinfo=UTC)
 STORE = "s3://uavtest"

@@ -45,6 +45,8 @@ def fly_lockstep(
         t = grant.until_ms
         x, y, z = path[min(step, len(path) - 1)]
         msgs = [LocalPosition(t, x, y, z)]
+        if t % 1000 == 0:  # a real vehicle's heartbeat: once a second
+            msgs.append(heartbeat(armed=vehicle.armed))
         if step == land_after:
             vehicle.armed = False
             msgs.append(heartbeat(armed=False))
@@ -219,3 +221,29 @@ def test_a_mission_the_vehicle_refuses_ends_before_the_flight() -> None:
     assert core.report.error == "mission upload refused after 3 attempts: MISSION_ACK NO_SPACE"
     assert core.report.start_ms is None
     assert not any(isinstance(m, CommandLong) for m in vehicle.sent)
+
+
+def test_an_accepted_arm_counts_before_the_next_heartbeat_shows_it() -> None:
+    commands = [Command(at=0, action="arm"), Command(at=0.5, action="disarm")]
+    core = ReplicaCore(config(commands=commands, mission=[]))
+    vehicle = ScriptedVehicle(beat_on_ack=False)  # heartbeats only once a second
+    core.start(0.0)
+    exchange(core, vehicle, [*boot(0), LockstepAnnounce(0)], wall=0.1)
+    fly_lockstep(core, vehicle, [(0.0, 0.0, 0.0)], land_after=10**6)
+    arm_disarm = [c.params[0] for c in vehicle.commands if c.command == Cmd.COMPONENT_ARM_DISARM]
+    assert arm_disarm[:2] == [1.0, 0.0]  # the disarm at 0.5 s was sent, not skipped as "not armed"
+    assert core.report.ending is Ending.LANDED and core.report.end_ms is not None
+    assert core.report.end_ms <= 2000  # landed once the arming grace passed, not at the timeout
+
+
+def test_a_stale_disarmed_heartbeat_right_after_arming_does_not_end_the_flight() -> None:
+    core = ReplicaCore(config(commands=[Command(at=0, action="arm")], mission=[], timeout_s=5))
+    vehicle = ScriptedVehicle(beat_on_ack=False)
+    core.start(0.0)
+    exchange(core, vehicle, [*boot(0), LockstepAnnounce(0)], wall=0.1)
+    exchange(
+        core, vehicle, [heartbeat(armed=False), LocalPosition(50, 0, 0, 0), LockstepAnnounce(50)], wall=0.2
+    )
+    assert core.stage is Stage.FLIGHT  # sent before the arm took effect: not a landing
+    fly_lockstep(core, vehicle, [(0.0, 0.0, -3.0)], land_after=10**6)
+    assert core.report.ending is Ending.TIMEOUT and core.report.armed_ever

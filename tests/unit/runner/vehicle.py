@@ -40,6 +40,7 @@ class ScriptedVehicle:
     mission: list[MissionItemInt] = field(default_factory=list)
     armed: bool = False
     refuse_arm: bool = False
+    beat_on_ack: bool = True  # a heartbeat right after each COMMAND_ACK (real vehicles: 1 Hz)
     grants: list[LockstepGrant] = field(default_factory=list)
     commands: list[CommandLong] = field(default_factory=list)
     sent: list[Outgoing] = field(default_factory=list)
@@ -74,7 +75,8 @@ class ScriptedVehicle:
                     else:
                         self.armed = msg.params[0] == 1.0
                 replies.append(CommandAck(msg.command, result))
-                replies.append(heartbeat(armed=self.armed))
+                if self.beat_on_ack:
+                    replies.append(heartbeat(armed=self.armed))
             elif isinstance(msg, LockstepGrant):
                 self.grants.append(msg)
         return replies

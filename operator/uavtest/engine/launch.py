@@ -1,0 +1,193 @@
+"""Starting a replica's processes: a plain exec, or a fork of a warm ``uavtest`` process.
+
+A ``uavtest runner`` or ``uavtest sitl`` process spends most of its start-up importing numpy,
+pydantic and pymavlink — about as long as flying a whole competition mission in lockstep. The
+``WarmLauncher`` starts one multiprocessing fork server that has imported them once; each
+``python -m uavtest.cli ...`` command is then a fresh process forked from it, in its own
+session, with its own stdin/stdout/stderr, running exactly the same CLI entry point with the
+same arguments. Anything else (PX4's binary, test doubles) is exec'd with ``subprocess``.
+Both kinds of process are handled through the ``Started`` protocol (a subset of ``Popen``).
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import multiprocessing.connection
+import os
+import subprocess
+import sys
+import threading
+from pathlib import Path
+from typing import Protocol
+
+__all__ = ["PRELOAD", "ExecLauncher", "Launcher", "Started", "WarmLauncher", "is_uavtest_cli", "start_exec"]
+
+# What a warm process imports before forking: the hot path of both replica processes.
+PRELOAD = ["uavtest.cli", "uavtest.engine.launch", "uavtest.runner.main", "uavtest.sitl.main"]
+
+
+class Started(Protocol):
+    """A started process: ``subprocess.Popen`` or a forked warm process."""
+
+    @property
+    def pid(self) -> int: ...
+
+    def poll(self) -> int | None: ...
+
+    def wait(self, timeout: float | None = None) -> int: ...
+
+
+class Launcher(Protocol):
+    """Starts one command with stdout / stderr appended to files."""
+
+    def start(
+        self,
+        argv: list[str],
+        *,
+        stdout: Path | None,
+        stderr: Path,
+        cwd: Path | None = None,
+        env: dict[str, str] | None = None,
+    ) -> Started: ...
+
+
+def _open_append(path: Path | None) -> int:
+    if path is None:
+        return os.open(os.devnull, os.O_WRONLY)
+    return os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+
+
+def start_exec(
+    argv: list[str],
+    *,
+    stdout: Path | None,
+    stderr: Path,
+    cwd: Path | None = None,
+    env: dict[str, str] | None = None,
+) -> Started:
+    """exec ``argv`` in its own session; stdout/stderr appended to the files (None: discarded)."""
+    out, err = _open_append(stdout), _open_append(stderr)
+    try:
+        return subprocess.Popen(
+            argv,
+            stdin=subprocess.DEVNULL,
+            stdout=out,
+            stderr=err,
+            cwd=cwd,
+            env=env,
+            start_new_session=True,
+        )
+    finally:
+        os.close(out)
+        os.close(err)
+
+
+class ExecLauncher:
+    """Every command exec'd with ``subprocess`` (cold start-up each time)."""
+
+    def start(
+        self,
+        argv: list[str],
+        *,
+        stdout: Path | None,
+        stderr: Path,
+        cwd: Path | None = None,
+        env: dict[str, str] | None = None,
+    ) -> Started:
+        return start_exec(argv, stdout=stdout, stderr=stderr, cwd=cwd, env=env)
+
+
+def is_uavtest_cli(argv: list[str]) -> bool:
+    """``[python, -m, uavtest.cli, ...]``: a command a warm process can run."""
+    return len(argv) >= 3 and argv[1:3] == ["-m", "uavtest.cli"]
+
+
+def _run_cli(args: list[str], stdout: str | None, stderr: str, cwd: str | None) -> None:
+    """In the forked process: own session and files, then the CLI entry point as ``uavtest``."""
+    os.setsid()
+    fds = (
+        os.open(os.devnull, os.O_RDONLY),
+        _open_append(Path(stdout) if stdout else None),
+        _open_append(Path(stderr)),
+    )
+    for target, fd in enumerate(fds):
+        os.dup2(fd, target)
+        os.close(fd)
+    if cwd:
+        os.chdir(cwd)
+    sys.argv = ["uavtest", *args]
+    from uavtest.cli import main
+
+    main()
+
+
+class _Forked:
+    """A forked warm process seen as a ``Popen``: pid, poll, wait (TimeoutExpired on timeout).
+
+    Its exit status arrives once, over a pipe from the fork server; reading it (``poll``) is
+    serialized with the launcher's lock, because ``Process.start`` polls every child too.
+    """
+
+    def __init__(
+        self, process: multiprocessing.process.BaseProcess, argv: list[str], lock: threading.Lock
+    ) -> None:
+        self._process = process
+        self._lock = lock
+        self.args = argv
+        pid = process.pid
+        assert pid is not None
+        self.pid = pid
+
+    @property
+    def returncode(self) -> int | None:
+        return self.poll()
+
+    def poll(self) -> int | None:
+        with self._lock:
+            return self._process.exitcode
+
+    def wait(self, timeout: float | None = None) -> int:
+        multiprocessing.connection.wait([self._process.sentinel], timeout)
+        code = self.poll()
+        if code is None:
+            raise subprocess.TimeoutExpired(self.args, timeout or 0.0)
+        return code
+
+
+class WarmLauncher:
+    """Forks ``uavtest`` CLI commands from a fork server that has imported the hot path once.
+
+    The fork server starts with the first command (one import, ~1 s) and ends with this
+    process. Commands that are not ``python -m uavtest.cli`` are exec'd.
+    """
+
+    def __init__(self, preload: list[str] | None = None) -> None:
+        self._context = multiprocessing.get_context("forkserver")
+        self._context.set_forkserver_preload(list(PRELOAD if preload is None else preload))
+        self._lock = threading.Lock()
+
+    def warm(self) -> None:
+        """Start the fork server now (it imports in the background) instead of at the first fork."""
+        import multiprocessing.forkserver
+
+        multiprocessing.forkserver.ensure_running()
+
+    def start(
+        self,
+        argv: list[str],
+        *,
+        stdout: Path | None,
+        stderr: Path,
+        cwd: Path | None = None,
+        env: dict[str, str] | None = None,
+    ) -> Started:
+        if env is not None or not is_uavtest_cli(argv):
+            return start_exec(argv, stdout=stdout, stderr=stderr, cwd=cwd, env=env)
+        process = self._context.Process(
+            target=_run_cli,
+            args=(argv[3:], str(stdout) if stdout else None, str(stderr), str(cwd) if cwd else None),
+            daemon=False,
+        )
+        with self._lock:  # multiprocessing's bookkeeping of children is not meant for threads
+            process.start()
+        return _Forked(process, argv, self._lock)

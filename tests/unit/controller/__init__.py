@@ -1,0 +1,1 @@
+"""Tests of uavtest.controller (a package so test module names cannot clash with other areas)."""

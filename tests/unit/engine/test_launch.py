@@ -1,0 +1,67 @@
+"""Warm launcher: `uavtest` commands forked from a fork server behave like exec'd ones."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from uavtest.engine.launch import ExecLauncher, WarmLauncher, is_uavtest_cli
+from uavtest.engine.replica import _stop
+
+
+@pytest.fixture(scope="module")
+def warm() -> WarmLauncher:
+    return WarmLauncher()
+
+
+def _cli(*args: str) -> list[str]:
+    return [sys.executable, "-m", "uavtest.cli", *args]
+
+
+@pytest.mark.parametrize("launcher", [ExecLauncher(), "warm"])
+def test_exit_codes_and_output_files_match_exec(
+    launcher: ExecLauncher | str, warm: WarmLauncher, tmp_path: Path
+) -> None:
+    start = warm.start if launcher == "warm" else launcher.start  # type: ignore[union-attr]
+    out, err = tmp_path / "out.log", tmp_path / "err.log"
+    ok = start(_cli("run", "--help"), stdout=out, stderr=err)
+    assert ok.wait(timeout=60) == 0
+    assert "--replicas" in out.read_text()
+
+    bad = start(_cli("run", str(tmp_path / "absent.yaml"), "--out", str(tmp_path)), stdout=out, stderr=err)
+    assert bad.wait(timeout=60) == 2
+    assert "absent.yaml" in err.read_text()
+
+
+def test_a_forked_simulator_is_stopped_cleanly(warm: WarmLauncher, tmp_path: Path) -> None:
+    err = tmp_path / "sim.err"
+    sim = warm.start(
+        _cli(
+            "sitl",
+            "--lockstep",
+            "--api-port",
+            "0",
+            "--api-local-port",
+            "0",
+            "--gcs-local-port",
+            "0",
+            "--log-dir",
+            str(tmp_path),
+        ),
+        stdout=None,
+        stderr=err,
+    )
+    deadline = time.monotonic() + 60
+    while not list(tmp_path.glob("*.ulg.part")) and time.monotonic() < deadline:  # the sim is up
+        assert sim.poll() is None, err.read_text()
+        time.sleep(0.02)
+    assert _stop(sim) == 0  # SIGTERM: the simulator closes its log and exits 0
+
+
+def test_only_uavtest_cli_commands_are_forked() -> None:
+    assert is_uavtest_cli(_cli("runner"))
+    assert not is_uavtest_cli([sys.executable, "-c", "pass"])
+    assert not is_uavtest_cli(["/opt/px4/bin/px4", "-i", "0"])
