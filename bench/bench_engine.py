@@ -46,8 +46,10 @@ def uavtest_run(test: Path, out: Path, *args: str, launch: str = "fork") -> tupl
 
 
 def single_replica(test: Path, runs: int, launch: str) -> None:
-    how = {"fork": "forked from a fresh fork server", "exec": "both processes exec'd cold"}[launch]
-    print(f"(a) one replica, runner in the loop, {test.name}, {runs} run(s), UAVTEST_LAUNCH={launch} ({how})")
+    print(
+        f"(a) one replica, runner in the loop, {test.name}, {runs} run(s) "
+        "(a single replica's sitl and runner are always exec'd cold: start-up included)"
+    )
     command_rtf, replica_rtf = [], []
     for k in range(runs):
         with tempfile.TemporaryDirectory(prefix="uavtest-bench-") as tmp:
@@ -109,8 +111,7 @@ def main() -> None:
         raise SystemExit(f"{args.test} not found (set UAVTEST_SHARED_DATA to the real data folder)")
     launches = ["fork", "exec"] if args.launch == "both" else [args.launch]
     print(f"load average before: {' '.join(f'{x:.1f}' for x in os.getloadavg())} (other work on the machine)")
-    for launch in launches:
-        single_replica(args.test, args.single_runs, launch)
+    single_replica(args.test, args.single_runs, "exec")
     if not args.skip_throughput:
         for launch in launches:
             throughput(args.test, args.replicas, args.jobs, launch)

@@ -91,6 +91,9 @@ def run(
     Exit codes: 0 every replica passed; 1 any replica failed; 2 bad input; 3 bench errors and no
     failure — also when some replicas passed and others errored, since the run cannot vouch for
     the test then. Errored replicas are retried twice with the same seed first.
+
+    Artifacts: OUT/local/<test>/<run-id>/replica-<i>/ and .../aggregate/. Environment:
+    UAVTEST_PX4_BIN (PX4 SITL binary for vehicle.simulator px4), UAVTEST_LAUNCH=fork|exec.
     """
     if engine == "kubernetes":
         from uavtest.controller.cluster_run import run_in_cluster

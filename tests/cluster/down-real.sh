@@ -19,7 +19,7 @@ owner=""; [ -f "$REAL_NODE_OWNER" ] && read -r owner _ < "$REAL_NODE_OWNER"
 OWNED=0; { [ "$owner" = "$D" ] || [ -z "$owner" ]; } && [ -f "$D/host-state.txt" ] && OWNED=1
 
 # 1. nothing may create or schedule new pods: stop kcm (Job controller) and scheduler first
-stop_pidfile "$D/kcm.pid"; stop_pidfile "$D/scheduler.pid"
+stop_pidfile "$D/kcm.pid" "$D/scheduler.pid"
 # 2. let kubelet stop every pod the proper way (containers, sandboxes, netns), for up to 30 s
 if [ -f "$D/kubelet.pid" ] && [ -f "$D/apiserver.pid" ]; then
   K delete pods --all -A --grace-period=0 --force --wait=false >/dev/null 2>&1

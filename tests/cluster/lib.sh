@@ -36,18 +36,29 @@ wait_for() {
   return 1
 }
 
-# stop_pidfile FILE : TERM the process named in FILE, wait up to 10 s, then KILL; remove FILE
+# stop_pidfile FILE... : TERM the processes named in the PID FILEs together, give them
+# $UAVTEST_STOP_GRACE seconds (default 5) to exit, then KILL the rest; remove the FILEs
 stop_pidfile() {
-  local f=$1 p
-  [ -f "$f" ] || return 0
-  p=$(cat "$f")
-  if [ -n "$p" ] && kill -0 "$p" 2>/dev/null; then
-    kill "$p" 2>/dev/null || true
-    for (( i = 0; i < 50; i++ )); do kill -0 "$p" 2>/dev/null || break; sleep 0.2; done
-    kill -0 "$p" 2>/dev/null && kill -9 "$p" 2>/dev/null
-    for (( i = 0; i < 25; i++ )); do kill -0 "$p" 2>/dev/null || break; sleep 0.2; done
-  fi
-  rm -f "$f"
+  local f p pids=() n
+  for f in "$@"; do
+    [ -f "$f" ] || continue
+    p=$(cat "$f"); rm -f "$f"
+    [ -n "$p" ] && kill "$p" 2>/dev/null && pids+=("$p")
+  done
+  [ ${#pids[@]} -gt 0 ] || return 0
+  n=$(( ${UAVTEST_STOP_GRACE:-5} * 10 ))
+  for (( i = 0; i < n; i++ )); do
+    alive=0; for p in "${pids[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
+    [ $alive = 0 ] && return 0
+    sleep 0.1
+  done
+  for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null; done
+  for (( i = 0; i < 50; i++ )); do
+    alive=0; for p in "${pids[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
+    [ $alive = 0 ] && return 0
+    sleep 0.1
+  done
+  return 0
 }
 
 # port NAME DEFAULT : a port from the cluster dir's ports.env (written by up.sh), else env, else default

@@ -8,6 +8,7 @@ namespace, with a kubeconfig whose user is a ServiceAccount holding exactly the 
 from __future__ import annotations
 
 import contextlib
+import ipaddress
 import json
 import os
 import signal
@@ -79,26 +80,53 @@ def least_privilege_kubeconfig(cluster: Cluster, namespace: str, out: Path) -> P
     return out
 
 
-def pod_reachable(address: str) -> str:
+def pod_reachable(cluster: Cluster, namespace: str, image: str, address: str) -> str:
     """host:port of a TCP relay pods can reach, forwarding to ADDRESS on the host's loopback.
 
     MinIO listens on 127.0.0.1 only; replica pods live behind the CNI bridge. The relay listens on
-    the bridge's address (the pods' gateway) when it has one.
+    the bridge's address. The harness's bridge has no address of its own (isGateway: false), so
+    one is added (the subnet's last host address); it goes away with the bridge at teardown.
     """
-    bridge_ip = _bridge_address()
+    bridge_ip = _bridge_address(cluster, namespace, image)
     host, port = address.rsplit(":", 1)
     relay = _Relay(bridge_ip, (host, int(port)))
     return f"{bridge_ip}:{relay.port}"
 
 
-def _bridge_address() -> str:
-    bridge = os.environ.get("UAVTEST_BRIDGE", "uavtest0")
+def _addresses(bridge: str) -> list[str] | None:
     out = subprocess.run(["ip", "-j", "-4", "addr", "show", "dev", bridge], capture_output=True, text=True)
-    if out.returncode == 0:
-        for link in json.loads(out.stdout or "[]"):
-            for info in link.get("addr_info", []):
-                return str(info["local"])
-    raise RuntimeError(f"the CNI bridge {bridge} has no IPv4 address: pods cannot reach the host's MinIO")
+    if out.returncode != 0:
+        return None  # no such link (yet)
+    return [
+        str(info["local"]) for link in json.loads(out.stdout or "[]") for info in link.get("addr_info", [])
+    ]
+
+
+def _bridge_address(cluster: Cluster, namespace: str, image: str) -> str:
+    bridge = os.environ.get("UAVTEST_BRIDGE", "uavtest0")
+    subnet = ipaddress.ip_network(os.environ.get("UAVTEST_POD_SUBNET", "10.244.7.0/24"))
+    if _addresses(bridge) is None:  # CNI makes the bridge with the first pod: start one
+        pod = {
+            "apiVersion": "v1",
+            "kind": "Pod",
+            "metadata": {"name": "bridge-up", "namespace": namespace},
+            "spec": {
+                "restartPolicy": "Never",
+                "containers": [
+                    {"name": "up", "image": image, "imagePullPolicy": "Never", "command": ["true"]}
+                ],
+            },
+        }
+        cluster.apply(pod)
+        cluster.wait_pod_done(namespace, "bridge-up")
+        cluster.kubectl("delete", "pod", "bridge-up", "-n", namespace, "--wait=false")
+    addresses = _addresses(bridge) or []
+    for a in addresses:
+        if ipaddress.ip_address(a) in subnet:
+            return a
+    ours = str(subnet.broadcast_address - 1)
+    subprocess.run(["ip", "addr", "add", f"{ours}/{subnet.prefixlen}", "dev", bridge], check=True)
+    return ours
 
 
 class _Relay:

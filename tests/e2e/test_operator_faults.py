@@ -53,7 +53,7 @@ def operator(
         namespace,
         minio,
         bucket=bucket,
-        pod_endpoint=pod_reachable(minio.endpoint),
+        pod_endpoint=pod_reachable(cluster, namespace, runner_image, minio.endpoint),
         kubeconfig=least_privilege_kubeconfig(cluster, namespace, tmp / "kubeconfig"),
         log=tmp / "operator.log",
         runner_image=runner_image,

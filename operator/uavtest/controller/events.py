@@ -10,9 +10,9 @@ from uavtest.analysis.models import RunSummary, Verdict
 from uavtest.controller.names import EventReason, Phase
 from uavtest.engine.outcome import summary_line
 
-__all__ = ["MAX_ERROR_EVENTS", "EventSpec", "events_for"]
+__all__ = ["MAX_LISTED", "EventSpec", "events_for"]
 
-MAX_ERROR_EVENTS = 5  # one ReplicaError event per errored replica, at most this many, then one in total
+MAX_LISTED = 3  # one ReplicaError event per run lists the first few errored replicas and their reasons
 
 
 class EventSpec(BaseModel):
@@ -24,7 +24,7 @@ class EventSpec(BaseModel):
 
 
 def events_for(summary: RunSummary, phase: Phase) -> list[EventSpec]:
-    """TestPassed or TestFailed, FlakyTest when flaky, ReplicaError for replicas with bench errors."""
+    """TestPassed or TestFailed, FlakyTest when flaky, one ReplicaError when replicas had bench errors."""
     line = summary_line(summary)
     out: list[EventSpec] = []
     if phase == Phase.SUCCEEDED:
@@ -44,20 +44,11 @@ def events_for(summary: RunSummary, phase: Phase) -> list[EventSpec]:
             )
         )
     errors = [r for r in summary.results if r.verdict == Verdict.ERROR]
-    for r in errors[:MAX_ERROR_EVENTS]:
-        out.append(
-            EventSpec(
-                type="Warning",
-                reason=EventReason.REPLICA_ERROR,
-                message=f"replica {r.index} (seed {r.seed}): {r.reason or 'bench error'}"[:1024],
-            )
-        )
-    if len(errors) > MAX_ERROR_EVENTS:
-        out.append(
-            EventSpec(
-                type="Warning",
-                reason=EventReason.REPLICA_ERROR,
-                message=f"{len(errors) - MAX_ERROR_EVENTS} more replicas ended in bench errors",
-            )
-        )
+    if errors:
+        listed = [
+            f"replica {r.index} (seed {r.seed}): {r.reason or 'bench error'}" for r in errors[:MAX_LISTED]
+        ]
+        more = f"; and {len(errors) - MAX_LISTED} more" if len(errors) > MAX_LISTED else ""
+        message = f"{len(errors)} of {summary.replicas} replicas had bench errors: {'; '.join(listed)}{more}"
+        out.append(EventSpec(type="Warning", reason=EventReason.REPLICA_ERROR, message=message[:1024]))
     return out

@@ -91,7 +91,15 @@ def _failed_index(pod: PodView | None) -> tuple[ReplicaState, str]:
 
 
 def _open_index(pod: PodView | None) -> ReplicaState:
-    if pod is not None and pod.phase == "Running" and not pod.deleting:
+    """An index the Job has not finished: running while its pod runs, or ended and awaits the Job's
+    bookkeeping (Succeeded, or Failed with a verdict code); pending before, or when it will be retried."""
+    if pod is None or pod.deleting:
+        return ReplicaState.PENDING
+    if pod.phase == "Running":
+        return ReplicaState.RUNNING
+    if pod.phase == "Succeeded" or (
+        pod.phase == "Failed" and pod.runner_exit in (RUNNER_EXIT_FAIL, RUNNER_EXIT_BAD_INPUT)
+    ):
         return ReplicaState.RUNNING
     return ReplicaState.PENDING
 

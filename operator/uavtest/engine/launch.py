@@ -23,7 +23,9 @@ from typing import Protocol
 __all__ = ["PRELOAD", "ExecLauncher", "Launcher", "Started", "WarmLauncher", "is_uavtest_cli", "start_exec"]
 
 # What a warm process imports before forking: the hot path of both replica processes.
-PRELOAD = ["uavtest.cli", "uavtest.engine.launch", "uavtest.runner.main", "uavtest.sitl.main"]
+# Not uavtest.cli itself: when the engine runs as ``python -m uavtest.cli``, each child re-runs
+# that module as ``__mp_main__`` and runpy warns if it is already imported.
+PRELOAD = ["typer", "rich.console", "uavtest.engine.launch", "uavtest.runner.main", "uavtest.sitl.main"]
 
 
 class Started(Protocol):

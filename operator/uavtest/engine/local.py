@@ -51,8 +51,9 @@ class EngineSettings(BaseSettings):
     """Environment of the local engine.
 
     ``UAVTEST_PX4_BIN`` names a PX4 SITL binary (for ``vehicle.simulator: px4``);
-    ``UAVTEST_LAUNCH`` is ``fork`` (default: replica processes forked from a warm fork server,
-    no import cost per process) or ``exec`` (each process started from scratch).
+    ``UAVTEST_LAUNCH`` is ``fork`` (default: with several replicas, their processes are forked
+    from a warm fork server, no import cost per process) or ``exec`` (each process started from
+    scratch; always so for a single replica and for PX4).
     """
 
     model_config = SettingsConfigDict(env_prefix="UAVTEST_", extra="ignore")
@@ -171,11 +172,12 @@ class _Board:
 
     def done(self, result: ReplicaResult) -> None:
         m = result.metrics
-        extra = ""
-        if m is not None and m.min_obstacle_distance is not None:
-            extra = f" · min distance {m.min_obstacle_distance:.2f} m"
-        reason = f" · {result.reason[:70]}" if result.reason else ""
-        self.status[result.index] = f"{result.verdict.value}{extra}{reason}"
+        detail = ""
+        if result.reason:
+            detail = f" · {result.reason[:90]}"
+        elif m is not None and m.min_obstacle_distance is not None:
+            detail = f" · min distance {m.min_obstacle_distance:.2f} m"
+        self.status[result.index] = f"{result.verdict.value}{detail}"
         self.progress.advance(self.task)
 
     def __rich__(self) -> RenderableType:
@@ -229,6 +231,19 @@ def _fly_all(
             raise
 
 
+def _launcher(settings: EngineSettings, px4_bin: Path | None, replicas: int) -> Launcher:
+    """Fork from a warm server when it pays: several replicas of the built-in simulator.
+
+    One replica starts faster exec'd (its two processes import in parallel, while a fork
+    server imports once, serially, before the first fork); PX4 is a binary, always exec'd.
+    """
+    if settings.launch == "fork" and px4_bin is None and replicas > 1:
+        warm = WarmLauncher()
+        warm.warm()  # the server imports while the engine prepares the replicas
+        return warm
+    return ExecLauncher()
+
+
 def _import_aggregation() -> None:
     """Import what aggregation needs (matplotlib) while the replicas fly, not after them."""
     for module in ("uavtest.engine.aggregate", "uavtest.analysis.plots"):
@@ -243,7 +258,6 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
 
     console = console or Console(stderr=True)
     settings = EngineSettings()
-    warm = WarmLauncher() if settings.launch == "fork" else None
     test = load_test(options.test)
     notices = [n for n in [aerialist_simulator_notice(options.test)] if n]
     for n in notices:
@@ -264,6 +278,7 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     seed = options.seed if options.seed is not None else test.spec.seed
     spec = test.spec.model_copy(update={"replicas": replicas, "seed": seed})
     indices = [options.replica] if options.replica is not None else list(range(replicas))
+    launcher = _launcher(settings, px4_bin, len(indices))
     parallel = min(jobs_wanted, len(indices))
     if px4_bin is not None:
         parallel = min(parallel, PX4_MAX_INSTANCES)
@@ -296,9 +311,6 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
         highlight=False,
     )
     board = _Board({j.index: j.seed for j in jobs}, {j.index: j.out_dir / "runner.stderr.log" for j in jobs})
-    launcher: Launcher = warm if warm is not None and px4_bin is None else ExecLauncher()
-    if isinstance(launcher, WarmLauncher):
-        launcher.warm()
     threading.Thread(target=_import_aggregation, name="import-aggregation", daemon=True).start()
     _fly_all(jobs, parallel, store, launcher, board, console)
 

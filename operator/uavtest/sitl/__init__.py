@@ -1,1 +1,12 @@
-"""uavtest.sitl."""
+"""uavtest.sitl: the built-in PX4-compatible simulator (``uavtest sitl``).
+
+A multicopter that speaks MAVLink 2 like PX4 SITL, flies missions, hold, takeoff, land,
+return and stick modes with PX4's parameters, in a world of box obstacles and wind, and writes
+a PX4-style ULog. The vehicle is pure code (``vehicle.Vehicle``: messages and clock ticks in,
+messages out); ``main.run_sitl`` is the process edge (UDP links, lockstep or speed factor,
+signals, log files); ``inprocess.fly_mission`` flies a mission without sockets.
+"""
+
+__all__ = ["SimConfig", "Vehicle"]
+
+from uavtest.sitl.vehicle import SimConfig, Vehicle

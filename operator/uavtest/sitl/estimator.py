@@ -23,7 +23,7 @@ SIGMA_HEADING = 0.005  # rad
 class Estimator:
     """Position, velocity and heading error processes, advanced at the controller rate."""
 
-    __slots__ = ("_rng", "ex", "ey", "ez", "eh", "evx", "evy", "evz")
+    __slots__ = ("_rng", "eh", "evx", "evy", "evz", "ex", "ey", "ez")
 
     def __init__(self, rng: random.Random) -> None:
         self._rng = rng

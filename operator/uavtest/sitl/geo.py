@@ -12,7 +12,7 @@ EARTH_RADIUS = 6_371_000.0
 class Projection:
     """Azimuthal equidistant projection around a reference (PX4 ``MapProjection``)."""
 
-    __slots__ = ("lat0", "lon0", "_cos0", "_lat0r", "_lon0r", "_sin0")
+    __slots__ = ("_cos0", "_lat0r", "_lon0r", "_sin0", "lat0", "lon0")
 
     def __init__(self, lat0: float, lon0: float) -> None:
         self.lat0, self.lon0 = lat0, lon0

@@ -18,6 +18,7 @@ This is the I/O edge around the pure ``Vehicle``:
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import select
@@ -34,12 +35,13 @@ from uavtest.sitl.mavlink_io import Codec
 from uavtest.sitl.ulog_writer import ULogFile
 from uavtest.sitl.vehicle import STEP_US, SimConfig, Vehicle
 
-__all__ = ["FileLogSink", "LOCKSTEP_NAME", "run_sitl"]
+__all__ = ["LOCKSTEP_NAME", "FileLogSink", "run_sitl"]
 
 log = logging.getLogger(__name__)
 
 LOCKSTEP_NAME = "LOCKSTEP"
 REANNOUNCE_S = 0.2
+DATAGRAM_BYTES = 1400
 _ALWAYS = frozenset({"HEARTBEAT", "STATUSTEXT", "NAMED_VALUE_INT"})
 
 
@@ -71,20 +73,34 @@ class FileLogSink:
 
 @dataclass
 class Link:
+    """One MAVLink link: a socket, where it sends to, and messages queued for one datagram batch.
+
+    Messages are sent packed into datagrams of up to ``DATAGRAM_BYTES`` (as PX4 buffers its UDP
+    output); MAVLink parsers (pymavlink, MAVSDK, QGC) read every message of a datagram.
+    """
+
     name: str
     sock: socket.socket
     dest: tuple[str, int]
     codec: Codec = field(default_factory=Codec)
     peer_seen: bool = False
     always_stream: bool = True
+    _buf: bytearray = field(default_factory=bytearray)
 
-    def send(self, msg: Msg) -> None:
+    def queue(self, msg: Msg) -> None:
         if not (self.always_stream or self.peer_seen or msg.name in _ALWAYS):
             return
-        try:
-            self.sock.sendto(self.codec.encode(msg), self.dest)
-        except OSError:  # nobody listening (ICMP refused), buffer full: UDP may drop
-            pass
+        packet = self.codec.encode(msg)
+        if len(self._buf) + len(packet) > DATAGRAM_BYTES:
+            self.flush()
+        self._buf += packet
+
+    def flush(self) -> None:
+        if not self._buf:
+            return
+        with contextlib.suppress(OSError):  # nobody listening (ICMP refused), buffer full: UDP may drop
+            self.sock.sendto(self._buf, self.dest)
+        self._buf.clear()
 
 
 def load_config(test: Path | None, seed: int) -> SimConfig:
@@ -146,14 +162,25 @@ def run_sitl(
     previous = {s: signal.signal(s, stop) for s in (signal.SIGTERM, signal.SIGINT)}
     log.info(
         "uavtest sitl: pid %d seed %d, API %s:%d -> %s:%d, GCS %d -> %d, %s",
-        os.getpid(), seed, host, local_api, host, api_port, gcs_local_port, gcs_port,
+        os.getpid(),
+        seed,
+        host,
+        local_api,
+        host,
+        api_port,
+        gcs_local_port,
+        gcs_port,
         "lockstep" if lockstep else f"speed factor {speed_factor:g}",
     )
 
     def broadcast(msgs: list[Msg]) -> None:
         for msg in msgs:
             for link in links:
-                link.send(msg)
+                link.queue(msg)
+
+    def flush() -> None:
+        for link in links:
+            link.flush()
 
     def announce() -> None:
         t_ms = vehicle.time_us // 1000
@@ -172,7 +199,7 @@ def run_sitl(
                     granted = True
                 continue
             for reply in vehicle.receive(msg):
-                link.send(reply)
+                link.queue(reply)
             broadcast(vehicle.drain())
         return granted
 
@@ -181,6 +208,7 @@ def run_sitl(
     broadcast(vehicle.drain())
     if lockstep:
         announce()
+    flush()
     last_announce = time.monotonic()
     try:
         while not stop.requested:
@@ -193,6 +221,7 @@ def run_sitl(
                 target = sim0 + int((now - wall0) * speed_factor * 1e6)
                 if target >= vehicle.time_us + STEP_US:
                     broadcast(vehicle.advance(target))
+                    flush()
                 timeout = max(0.0005, STEP_US * 5 / 1e6 / speed_factor)
             ready, _, _ = select.select(list(by_fd), [], [], timeout)
             granted = False
@@ -211,6 +240,7 @@ def run_sitl(
                     broadcast([vehicle.heartbeat()])
                 announce()
                 last_announce = time.monotonic()
+            flush()
     finally:
         vehicle.recorder.stop()
         for link in links:

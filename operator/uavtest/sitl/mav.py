@@ -144,3 +144,4 @@ class MavSeverity(IntEnum):
 # battery) plus MAV_SYS_STATUS_PREARM_CHECK (set when ready to arm).
 SYS_STATUS_SENSORS = 1 | 2 | 4 | 8 | 32 | 1024 | 2048 | 4096 | 8192 | 16384 | 32768 | 2097152 | 33554432
 SYS_STATUS_PREARM_CHECK = 268435456
+SYS_STATUS_GPS = 32

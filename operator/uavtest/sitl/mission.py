@@ -25,7 +25,13 @@ __all__ = [
 
 #: commands that fly somewhere (have a position)
 NAV_COMMANDS = frozenset(
-    {MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_UNLIM, MavCmd.NAV_LOITER_TIME, MavCmd.NAV_LAND, MavCmd.NAV_TAKEOFF}
+    {
+        MavCmd.NAV_WAYPOINT,
+        MavCmd.NAV_LOITER_UNLIM,
+        MavCmd.NAV_LOITER_TIME,
+        MavCmd.NAV_LAND,
+        MavCmd.NAV_TAKEOFF,
+    }
 )
 #: every command a mission may hold: the nav commands, RTL, change speed, and camera no-ops
 SUPPORTED_COMMANDS = NAV_COMMANDS | {
@@ -111,7 +117,13 @@ def from_spec(items: Sequence[MissionItem]) -> list[NavItem]:
             out.append(NavItem(seq, MavCmd.NAV_RETURN_TO_LAUNCH, MavFrame.MISSION))
         elif item.kind == MissionItemKind.CHANGE_SPEED:
             out.append(
-                NavItem(seq, MavCmd.DO_CHANGE_SPEED, MavFrame.MISSION, param1=1.0, param2=item.speed or -1.0,
-                        param3=-1.0)
+                NavItem(
+                    seq,
+                    MavCmd.DO_CHANGE_SPEED,
+                    MavFrame.MISSION,
+                    param1=1.0,
+                    param2=item.speed or -1.0,
+                    param3=-1.0,
+                )
             )
     return out

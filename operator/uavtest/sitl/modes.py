@@ -96,9 +96,17 @@ MODE_OF_NAV_STATE: dict[NavState, tuple[int, int]] = {v: k for k, v in NAV_STATE
 MODE_OF_NAV_STATE[NavState.DESCEND] = (MainMode.AUTO, AutoSubMode.LAND)
 MODE_OF_NAV_STATE[NavState.TERMINATION] = (MainMode.MANUAL, 0)
 
-MANUAL_NAV_STATES = frozenset({NavState.MANUAL, NavState.STAB, NavState.ACRO, NavState.ALTCTL, NavState.POSCTL})
+MANUAL_NAV_STATES = frozenset(
+    {NavState.MANUAL, NavState.STAB, NavState.ACRO, NavState.ALTCTL, NavState.POSCTL}
+)
 AUTO_NAV_STATES = frozenset(
-    {NavState.AUTO_MISSION, NavState.AUTO_LOITER, NavState.AUTO_RTL, NavState.AUTO_TAKEOFF, NavState.AUTO_LAND}
+    {
+        NavState.AUTO_MISSION,
+        NavState.AUTO_LOITER,
+        NavState.AUTO_RTL,
+        NavState.AUTO_TAKEOFF,
+        NavState.AUTO_LAND,
+    }
 )
 
 # MAV_MODE_FLAG bits

@@ -128,7 +128,12 @@ class Navigator:
         self.events.append(Event(EventKind.CURRENT, self.current))
 
     def enter(
-        self, nav_state: NavState, st: State, now: float, *, target_alt: float | None = None,
+        self,
+        nav_state: NavState,
+        st: State,
+        now: float,
+        *,
+        target_alt: float | None = None,
         hold_z: float | None = None,
     ) -> None:
         """Start flying a mode from the current state (a hold keeps ``hold_z`` when given)."""
@@ -163,9 +168,7 @@ class Navigator:
             return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
         return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)  # hold
 
-    def _goal_set(
-        self, kind: GoalKind, x: float, y: float, z: float, yaw: float = math.nan
-    ) -> Goal:
+    def _goal_set(self, kind: GoalKind, x: float, y: float, z: float, yaw: float = math.nan) -> Goal:
         g = self._goal
         g.kind, g.x, g.y, g.z, g.yaw, g.speed = kind, x, y, z, yaw, self.speed
         return g
@@ -228,8 +231,13 @@ class Navigator:
             if cmd == MavCmd.NAV_RETURN_TO_LAUNCH:
                 s.rtl = self._rtl_start(st, now)
                 s.phase = Phase.FLY
-            elif cmd not in (MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_TIME, MavCmd.NAV_LOITER_UNLIM,
-                             MavCmd.NAV_LAND, MavCmd.NAV_TAKEOFF):
+            elif cmd not in (
+                MavCmd.NAV_WAYPOINT,
+                MavCmd.NAV_LOITER_TIME,
+                MavCmd.NAV_LOITER_UNLIM,
+                MavCmd.NAV_LAND,
+                MavCmd.NAV_TAKEOFF,
+            ):
                 self._advance(st, now)  # camera and other no-op items
                 return self._mission(st, now)
             else:
@@ -238,7 +246,9 @@ class Navigator:
                     s.x, s.y = st.x, st.y
                     s.z = -max(-s.z, p["MIS_TAKEOFF_ALT"])
                     s.phase = Phase.TAKEOFF
-                    self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, f"Climb to {-s.z:.1f} meters above home")))
+                    self.events.append(
+                        Event(EventKind.TEXT, (MavSeverity.INFO, f"Climb to {-s.z:.1f} meters above home"))
+                    )
                 elif cmd == MavCmd.NAV_LAND:
                     s.z = st.z
                     s.phase = Phase.FLY
@@ -280,7 +290,11 @@ class Navigator:
                     s.since = now
                     nxt = self._next_position(self.current, st)
                     s.yaw = st.yaw
-                    if nxt is not None and int(p["MPC_YAW_MODE"]) == 0 and math.hypot(nxt[0] - s.x, nxt[1] - s.y) > 0.5:
+                    if (
+                        nxt is not None
+                        and int(p["MPC_YAW_MODE"]) == 0
+                        and math.hypot(nxt[0] - s.x, nxt[1] - s.y) > 0.5
+                    ):
                         s.yaw = math.atan2(nxt[1] - s.y, nxt[0] - s.x)
             else:
                 gx, gy = self._settling(s, st, now)
@@ -334,7 +348,7 @@ class Navigator:
         hx, hy, _ = self.home
         far = math.hypot(st.x - hx, st.y - hy) > p["RTL_MIN_DIST"]
         alt = max(-st.z, p["RTL_RETURN_ALT"]) if far else -st.z
-        self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, "RTL: start return at %d m" % round(alt))))
+        self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, f"RTL: start return at {round(alt)} m")))
         return _Rtl(phase="climb", alt=alt, since=now)
 
     def _rtl(self, r: _Rtl, st: State, now: float) -> Goal:

@@ -49,8 +49,16 @@ class Box:
         r = math.radians(o.position.r)
         hl, hw = o.size.l / 2, o.size.w / 2
         return cls(
-            index, o.position.x, o.position.y, math.cos(r), math.sin(r), hl, hw,
-            -(o.position.z + o.size.h), -o.position.z, math.hypot(hl, hw),
+            index,
+            o.position.x,
+            o.position.y,
+            math.cos(r),
+            math.sin(r),
+            hl,
+            hw,
+            -(o.position.z + o.size.h),
+            -o.position.z,
+            math.hypot(hl, hw),
         )
 
     def contains(self, x: float, y: float, z: float) -> bool:
@@ -72,9 +80,7 @@ class World:
         self.near: list[Box] = []
 
     def refresh_near(self, x: float, y: float) -> None:
-        self.near = [
-            b for b in self.boxes if math.hypot(x - b.cx, y - b.cy) <= b.radius + NEAR_MARGIN
-        ]
+        self.near = [b for b in self.boxes if math.hypot(x - b.cx, y - b.cy) <= b.radius + NEAR_MARGIN]
 
     def hit(self, x: float, y: float, z: float) -> Box | None:
         for b in self.near:
@@ -119,8 +125,22 @@ class Body:
     """Position, velocity, actual acceleration and yaw of the vehicle (NED, SI units)."""
 
     __slots__ = (
-        "ax", "ay", "az", "kq", "kl", "motors", "on_ground", "tau_tilt", "vx", "vy", "vz", "x", "y", "yaw",
-        "yawrate", "z",
+        "ax",
+        "ay",
+        "az",
+        "kl",
+        "kq",
+        "motors",
+        "on_ground",
+        "tau_tilt",
+        "vx",
+        "vy",
+        "vz",
+        "x",
+        "y",
+        "yaw",
+        "yawrate",
+        "z",
     )
 
     def __init__(self, tau_tilt: float = TAU_TILT, drag_scale: float = 1.0) -> None:

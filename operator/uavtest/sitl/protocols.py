@@ -62,9 +62,17 @@ class ParamProtocol:
                 return []
             raw_type = int(msg.get("param_type", ParamType.REAL32))
             raw = float(msg.get("param_value", 0.0))
-            if name in self.params and self.params.type_of(name) == ParamType.INT32 and raw_type != ParamType.INT32:
+            if (
+                name in self.params
+                and self.params.type_of(name) == ParamType.INT32
+                and raw_type != ParamType.INT32
+            ):
                 value: int | float = round(raw) if math.isfinite(raw) else 0
-            elif name in self.params and self.params.type_of(name) == ParamType.REAL32 and raw_type == ParamType.INT32:
+            elif (
+                name in self.params
+                and self.params.type_of(name) == ParamType.REAL32
+                and raw_type == ParamType.INT32
+            ):
                 value = float(decode_param_value(raw, ParamType.INT32))
             else:
                 value = decode_param_value(raw, raw_type)
@@ -85,8 +93,12 @@ class Upload:
 def _ack(msg: Msg, result: MissionResult, mission_type: int = 0) -> Msg:
     return Msg(
         "MISSION_ACK",
-        {"target_system": msg.sysid, "target_component": msg.compid, "type": int(result),
-         "mission_type": mission_type},
+        {
+            "target_system": msg.sysid,
+            "target_component": msg.compid,
+            "type": int(result),
+            "mission_type": mission_type,
+        },
     )
 
 
@@ -101,10 +113,21 @@ def item_message(item: NavItem, msg: Msg, current: int) -> Msg:
     return Msg(
         "MISSION_ITEM_INT",
         {
-            "target_system": msg.sysid, "target_component": msg.compid, "seq": item.seq, "frame": item.frame,
-            "command": item.command, "current": int(item.seq == current), "autocontinue": item.autocontinue,
-            "param1": item.param1, "param2": item.param2, "param3": item.param3, "param4": item.param4,
-            "x": item.x, "y": item.y, "z": item.z, "mission_type": 0,
+            "target_system": msg.sysid,
+            "target_component": msg.compid,
+            "seq": item.seq,
+            "frame": item.frame,
+            "command": item.command,
+            "current": int(item.seq == current),
+            "autocontinue": item.autocontinue,
+            "param1": item.param1,
+            "param2": item.param2,
+            "param3": item.param3,
+            "param4": item.param4,
+            "x": item.x,
+            "y": item.y,
+            "z": item.z,
+            "mission_type": 0,
         },
     )
 
@@ -120,8 +143,14 @@ class MissionProtocol:
     def handle(self, msg: Msg, now_us: int, current: int) -> list[Msg] | None:
         name = msg.name
         if name not in {
-            "MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_REQUEST_LIST", "MISSION_REQUEST_INT",
-            "MISSION_REQUEST", "MISSION_CLEAR_ALL", "MISSION_ACK",
+            "MISSION_COUNT",
+            "MISSION_ITEM_INT",
+            "MISSION_ITEM",
+            "MISSION_REQUEST_LIST",
+            "MISSION_REQUEST_INT",
+            "MISSION_REQUEST",
+            "MISSION_CLEAR_ALL",
+            "MISSION_ACK",
         }:
             return None
         mtype = int(msg.get("mission_type", 0) or 0)
@@ -129,8 +158,17 @@ class MissionProtocol:
             return []
         if mtype != MissionType.MISSION:
             if name == "MISSION_REQUEST_LIST":
-                return [Msg("MISSION_COUNT", {"target_system": msg.sysid, "target_component": msg.compid,
-                                              "count": 0, "mission_type": mtype})]
+                return [
+                    Msg(
+                        "MISSION_COUNT",
+                        {
+                            "target_system": msg.sysid,
+                            "target_component": msg.compid,
+                            "count": 0,
+                            "mission_type": mtype,
+                        },
+                    )
+                ]
             if name == "MISSION_CLEAR_ALL":
                 return [_ack(msg, MissionResult.ACCEPTED, mtype)]
             return [_ack(msg, MissionResult.UNSUPPORTED, mtype)]
@@ -153,8 +191,17 @@ class MissionProtocol:
         if name in ("MISSION_ITEM_INT", "MISSION_ITEM"):
             return self._item(msg, now_us)
         if name == "MISSION_REQUEST_LIST":
-            return [Msg("MISSION_COUNT", {"target_system": msg.sysid, "target_component": msg.compid,
-                                          "count": len(self.items), "mission_type": 0})]
+            return [
+                Msg(
+                    "MISSION_COUNT",
+                    {
+                        "target_system": msg.sysid,
+                        "target_component": msg.compid,
+                        "count": len(self.items),
+                        "mission_type": 0,
+                    },
+                )
+            ]
         # MISSION_REQUEST_INT / MISSION_REQUEST
         seq = int(msg.get("seq", -1))
         if not 0 <= seq < len(self.items):
@@ -182,10 +229,17 @@ class MissionProtocol:
         if msg.name == "MISSION_ITEM":
             x, y = round(float(x) * 1e7), round(float(y) * 1e7)
         item = NavItem(
-            seq=seq, command=int(msg.get("command", 0)), frame=int(msg.get("frame", 0)),
-            param1=float(msg.get("param1", 0.0)), param2=float(msg.get("param2", 0.0)),
-            param3=float(msg.get("param3", 0.0)), param4=float(msg.get("param4", 0.0)),
-            x=int(x), y=int(y), z=float(msg.get("z", 0.0)), autocontinue=int(msg.get("autocontinue", 1)),
+            seq=seq,
+            command=int(msg.get("command", 0)),
+            frame=int(msg.get("frame", 0)),
+            param1=float(msg.get("param1", 0.0)),
+            param2=float(msg.get("param2", 0.0)),
+            param3=float(msg.get("param3", 0.0)),
+            param4=float(msg.get("param4", 0.0)),
+            x=int(x),
+            y=int(y),
+            z=float(msg.get("z", 0.0)),
+            autocontinue=int(msg.get("autocontinue", 1)),
         )
         verdict = check_item(item)
         if verdict != MissionResult.ACCEPTED:

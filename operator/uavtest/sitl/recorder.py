@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from uavtest.sitl.params import ParamStore
 from uavtest.sitl.mav import ParamType
+from uavtest.sitl.params import ParamStore
 from uavtest.sitl.ulog_topics import FORMATS, TOPICS
 from uavtest.sitl.ulog_writer import ULogEncoder
 

@@ -27,7 +27,13 @@ VERSION = 1
 SYNC_MAGIC = bytes([0x2F, 0x73, 0x13, 0x20, 0x25, 0x0C, 0xBB, 0x12])
 
 #: logged-string levels (ASCII digits as in the Linux kernel, as PX4 writes them)
-LOG_LEVEL = {"emergency": ord("0"), "error": ord("3"), "warning": ord("4"), "notice": ord("5"), "info": ord("6")}
+LOG_LEVEL = {
+    "emergency": ord("0"),
+    "error": ord("3"),
+    "warning": ord("4"),
+    "notice": ord("5"),
+    "info": ord("6"),
+}
 
 _CODES = {
     "int8_t": "b",

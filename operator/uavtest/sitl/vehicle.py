@@ -19,10 +19,11 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from uavtest.sitl import mav
+from uavtest.sitl import ulog_topics as topics
 from uavtest.sitl.controller import Controller, Goal, GoalKind, Limits
 from uavtest.sitl.estimator import Estimator
 from uavtest.sitl.geo import Projection
-from uavtest.sitl.mav import LandedState, MavCmd, MavResult, MavSeverity, MavState, Msg
+from uavtest.sitl.mav import LandedState, MavCmd, MavResult, MavSeverity, MavState, Msg, ParamType
 from uavtest.sitl.mission import NavItem
 from uavtest.sitl.modes import (
     ARMING_STATE_ARMED,
@@ -36,15 +37,14 @@ from uavtest.sitl.modes import (
 )
 from uavtest.sitl.navigator import EventKind, Navigator, State
 from uavtest.sitl.params import ParamStore
-from uavtest.sitl.physics import GRAVITY, Body, World, WindModel
+from uavtest.sitl.physics import GRAVITY, Body, WindModel, World
 from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
-from uavtest.sitl import ulog_topics as topics
-from uavtest.sitl.ulog_writer import LOG_LEVEL
 from uavtest.sitl.telemetry import MESSAGE_IDS, Schedule
+from uavtest.sitl.ulog_writer import LOG_LEVEL
 from uavtest.spec.models import Home, Obstacle, UavTestSpec, Wind
 
-__all__ = ["SimConfig", "Vehicle", "STEP_US"]
+__all__ = ["STEP_US", "SimConfig", "Vehicle"]
 
 STEP_US = 4_000  # 250 Hz physics
 CONTROL_EVERY = 5  # 50 Hz control
@@ -52,6 +52,8 @@ CONTROL_DT = STEP_US * CONTROL_EVERY / 1e6
 READY_US = 1_500_000  # estimator converged, home set
 SW_VERSION = 0x010F0000  # reported as PX4 v1.15.0 compatible
 TAKEOFF_DETECT_S = 0.8  # into the takeoff ramp, PX4's land detector reports the takeoff
+
+_NEEDS_FIX = frozenset({"GLOBAL_POSITION_INT", "HOME_POSITION"})  # PX4 sends them once it has a fix
 
 # vehicle_status.latest_(dis)arming_reason
 REASON_EXTERNAL = 4
@@ -72,7 +74,9 @@ class SimConfig:
     seed: int = 0
 
     @classmethod
-    def from_spec(cls, spec: UavTestSpec, seed: int, params: Mapping[str, int | float] | None = None) -> SimConfig:
+    def from_spec(
+        cls, spec: UavTestSpec, seed: int, params: Mapping[str, int | float] | None = None
+    ) -> SimConfig:
         return cls(
             home=spec.world.home,
             obstacles=tuple(spec.world.obstacles),
@@ -90,7 +94,9 @@ class Vehicle:
         self.params = ParamStore(config.params)
         self.proj = Projection(config.home.lat, config.home.lon)
         self.home_alt = config.home.alt
-        self.body = Body(tau_tilt=0.12 * variation.uniform(0.9, 1.1), drag_scale=variation.uniform(0.93, 1.07))
+        self.body = Body(
+            tau_tilt=0.12 * variation.uniform(0.9, 1.1), drag_scale=variation.uniform(0.93, 1.07)
+        )
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
         self.est = Estimator(random.Random(f"{seed}:estimator"))
@@ -216,7 +222,10 @@ class Vehicle:
             return []
         if name == "SET_MODE":
             if msg.get("target_system", 1) in (0, mav.SYSTEM_ID):
-                main, sub = (int(msg.get("custom_mode", 0)) >> 16) & 0xFF, (int(msg.get("custom_mode", 0)) >> 24) & 0xFF
+                main, sub = (
+                    (int(msg.get("custom_mode", 0)) >> 16) & 0xFF,
+                    (int(msg.get("custom_mode", 0)) >> 24) & 0xFF,
+                )
                 self._set_mode(nav_state_from_custom_mode(main, sub))
             return []
         if name == "TIMESYNC":
@@ -273,7 +282,8 @@ class Vehicle:
             self.ctrl.reset(st.x, st.y, st.z, 0.0, 0.0, 0.0, st.yaw)
         self._drain_nav_events()
         for name in self.schedule.due(t):
-            self._out.append(self._telemetry(name, t))
+            if self.ready or name not in _NEEDS_FIX:
+                self._out.append(self._telemetry(name, t))
         self._log(t)
         if self._close_log:
             self._close_log = False
@@ -290,7 +300,11 @@ class Vehicle:
                 NavState.POSCTL: GoalKind.VELOCITY,
                 NavState.ALTCTL: GoalKind.ALTITUDE,
             }.get(ns, GoalKind.ATTITUDE)
-            if self.landed and self._sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2 and kind != GoalKind.ATTITUDE:
+            if (
+                self.landed
+                and self._sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2
+                and kind != GoalKind.ATTITUDE
+            ):
                 return Goal(GoalKind.IDLE)
             return Goal(kind, sticks=self._sticks)
         return self.nav.update(self.st, t / 1e6)
@@ -332,7 +346,9 @@ class Vehicle:
             self.landed = self.ground_contact = self.maybe_landed = True
             self.landed_at_us = t
             self._status_dirty = True
-        self.st.landed = self.landed
+        if self.st.landed != self.landed:  # tell clients at once, not at the next 2 Hz slot
+            self.st.landed = self.landed
+            self._out.append(self._telemetry("EXTENDED_SYS_STATE", t))
         if not self.armed:
             return
         if self.crashed:
@@ -394,7 +410,21 @@ class Vehicle:
         self._home_count += 1
         self.recorder.data(
             "home_position",
-            (t, lat, lon, self.home_alt - st.z, st.x, st.y, st.z, st.yaw, True, True, True, False, self._home_count),
+            (
+                t,
+                lat,
+                lon,
+                self.home_alt - st.z,
+                st.x,
+                st.y,
+                st.z,
+                st.yaw,
+                True,
+                True,
+                True,
+                False,
+                self._home_count,
+            ),
         )
         self._out.append(self._home_position(t))
 
@@ -491,8 +521,6 @@ class Vehicle:
 
     def _params_changed(self) -> None:
         for name in self.param_proto.changed:
-            from uavtest.sitl.mav import ParamType  # local: avoids a wide import at the top
-
             self.recorder.param(name, self.params.type_of(name) == ParamType.INT32, self.params[name])
         self.param_proto.changed.clear()
         self.limits = Limits.of(self.params)
@@ -513,14 +541,20 @@ class Vehicle:
             p5, p6, p7 = float(f.get("param5", 0.0)), float(f.get("param6", 0.0)), float(f.get("param7", 0.0))
         self.recorder.data(
             "vehicle_command",
-            topics.command(t, cmd, (p1, p2, p3, p4, p5, p6, p7), (msg.sysid, msg.compid),
-                           (int(f.get("target_system", 0)), int(f.get("target_component", 0))), True),
+            topics.command(
+                t,
+                cmd,
+                (p1, p2, p3, p4, p5, p6, p7),
+                (msg.sysid, msg.compid),
+                (int(f.get("target_system", 0)), int(f.get("target_component", 0))),
+                True,
+            ),
         )
         extra: list[Msg] = []
         if cmd == MavCmd.COMPONENT_ARM_DISARM:
             if p1 >= 0.5:
                 result = self._arm(t, REASON_EXTERNAL)
-            elif self.landed or int(round(p2)) == mav.FORCE_DISARM_MAGIC or not self.armed:
+            elif self.landed or round(p2) == mav.FORCE_DISARM_MAGIC or not self.armed:
                 if self.armed:
                     self._disarm(t, REASON_EXTERNAL, "Disarmed by external command")
                 result = MavResult.ACCEPTED
@@ -576,14 +610,18 @@ class Vehicle:
                 result = MavResult.UNSUPPORTED
         else:
             result = MavResult.UNSUPPORTED
-        self.recorder.data(
-            "vehicle_command_ack", (t, cmd, int(result), 0, 0, msg.sysid, msg.compid, True)
-        )
+        self.recorder.data("vehicle_command_ack", (t, cmd, int(result), 0, 0, msg.sysid, msg.compid, True))
         self._drain_nav_events()
         ack = Msg(
             "COMMAND_ACK",
-            {"command": cmd, "result": int(result), "progress": 0, "result_param2": 0,
-             "target_system": msg.sysid, "target_component": msg.compid},
+            {
+                "command": cmd,
+                "result": int(result),
+                "progress": 0,
+                "result_param2": 0,
+                "target_system": msg.sysid,
+                "target_component": msg.compid,
+            },
         )
         return [ack, *extra]
 
@@ -619,12 +657,29 @@ class Vehicle:
         total = len(nav.mission)
         self.recorder.data(
             "mission_result",
-            (self.time_us, 0, 0, self._home_count, nav.reached, min(nav.current, 65535), total, total > 0,
-             False, nav.finished, False, 0, 0, 0, 0),
+            (
+                self.time_us,
+                0,
+                0,
+                self._home_count,
+                nav.reached,
+                min(nav.current, 65535),
+                total,
+                total > 0,
+                False,
+                nav.finished,
+                False,
+                0,
+                0,
+                0,
+                0,
+            ),
         )
 
     def _text(self, severity: int, text: str) -> None:
-        self._out.append(Msg("STATUSTEXT", {"severity": int(severity), "text": text[:50], "id": 0, "chunk_seq": 0}))
+        self._out.append(
+            Msg("STATUSTEXT", {"severity": int(severity), "text": text[:50], "id": 0, "chunk_seq": 0})
+        )
         level = LOG_LEVEL["info"]
         if severity <= MavSeverity.CRITICAL:
             level = LOG_LEVEL["emergency"] if severity == MavSeverity.EMERGENCY else ord("2")
@@ -645,8 +700,14 @@ class Vehicle:
         rec.data(
             "vehicle_local_position",
             topics.local_position(
-                t, (st.x, st.y, st.z), (b.vx + e.evx, b.vy + e.evy, b.vz + e.evz), (b.ax, b.ay, b.az + 0.0),
-                st.yaw, (self.config.home.lat, self.config.home.lon, self.home_alt), 0, True,
+                t,
+                (st.x, st.y, st.z),
+                (b.vx + e.evx, b.vy + e.evy, b.vz + e.evz),
+                (b.ax, b.ay, b.az + 0.0),
+                st.yaw,
+                (self.config.home.lat, self.config.home.lon, self.home_alt),
+                0,
+                True,
             ),
         )
         if tick % (CONTROL_EVERY * 2) == 0:  # 25 Hz
@@ -656,30 +717,70 @@ class Vehicle:
         if tick % (CONTROL_EVERY * 5) == 0:  # 10 Hz
             lat, lon = self.proj.reproject(st.x, st.y)
             alt = self.home_alt - st.z
-            rec.data("vehicle_global_position", (t, t, lat, lon, alt, alt, 0.3, 0.4, self.home_alt, True, False))
+            rec.data(
+                "vehicle_global_position", (t, t, lat, lon, alt, alt, 0.3, 0.4, self.home_alt, True, False)
+            )
             g = self.goal
             cx, cy, cz = self.ctrl.px, self.ctrl.py, self.ctrl.pz
             rec.data(
                 "trajectory_setpoint",
-                (t, cx, cy, cz, self.ctrl.vx, self.ctrl.vy, self.ctrl.vz, self.ctrl.ax, self.ctrl.ay, 0.0,
-                 self.ctrl.yaw_sp, self.ctrl.yawrate_sp),
+                (
+                    t,
+                    cx,
+                    cy,
+                    cz,
+                    self.ctrl.vx,
+                    self.ctrl.vy,
+                    self.ctrl.vz,
+                    self.ctrl.ax,
+                    self.ctrl.ay,
+                    0.0,
+                    self.ctrl.yaw_sp,
+                    self.ctrl.yawrate_sp,
+                ),
             )
             self._log_setpoint(t, g)
         if self._status_dirty or tick % (CONTROL_EVERY * 50) == 0:  # on change, else 1 Hz
             self._status_dirty = False
             rec.data(
                 "vehicle_status",
-                (t, self.armed_at_us if self.armed else 0, self.takeoff_us if not self.landed else 0,
-                 self.nav_state_us, ARMING_STATE_ARMED if self.armed else ARMING_STATE_DISARMED,
-                 self.arming_reason, self.disarming_reason, int(self.user_nav_state), int(self.nav_state),
-                 4 if self.crashed else 0, 0, 1, self.failsafe, self.gcs_lost, mav.MAV_TYPE_QUADROTOR,
-                 mav.SYSTEM_ID, mav.COMPONENT_ID, self.ready),
+                (
+                    t,
+                    self.armed_at_us if self.armed else 0,
+                    self.takeoff_us if not self.landed else 0,
+                    self.nav_state_us,
+                    ARMING_STATE_ARMED if self.armed else ARMING_STATE_DISARMED,
+                    self.arming_reason,
+                    self.disarming_reason,
+                    int(self.user_nav_state),
+                    int(self.nav_state),
+                    4 if self.crashed else 0,
+                    0,
+                    1,
+                    self.failsafe,
+                    self.gcs_lost,
+                    mav.MAV_TYPE_QUADROTOR,
+                    mav.SYSTEM_ID,
+                    mav.COMPONENT_ID,
+                    self.ready,
+                ),
             )
             rec.data(
                 "vehicle_land_detected",
-                (t, self.crashed and not b.on_ground and not self.landed, self.ground_contact, self.maybe_landed,
-                 self.landed, False, self.goal.kind is GoalKind.LAND, self.landed, abs(b.vz) > 0.25,
-                 math.hypot(b.vx, b.vy) > 1.5, True, self.landed),
+                (
+                    t,
+                    self.crashed and not b.on_ground and not self.landed,
+                    self.ground_contact,
+                    self.maybe_landed,
+                    self.landed,
+                    False,
+                    self.goal.kind is GoalKind.LAND,
+                    self.landed,
+                    abs(b.vz) > 0.25,
+                    math.hypot(b.vx, b.vy) > 1.5,
+                    True,
+                    self.landed,
+                ),
             )
             rec.data("actuator_armed", (t, self.armed, False, self.ready, False, False, False))
 
@@ -694,18 +795,32 @@ class Vehicle:
             return
         lat, lon = self.proj.reproject(g.x, g.y)
         speed = g.speed if g.speed == g.speed else self.limits.cruise
-        cur = topics.setpoint(t, lat, lon, self.home_alt - g.z, g.yaw, kind, self.params["NAV_ACC_RAD"], speed)
-        self.recorder.data("position_setpoint_triplet", (t, *topics.INVALID_SETPOINT, *cur, *topics.INVALID_SETPOINT))
+        cur = topics.setpoint(
+            t, lat, lon, self.home_alt - g.z, g.yaw, kind, self.params["NAV_ACC_RAD"], speed
+        )
+        self.recorder.data(
+            "position_setpoint_triplet", (t, *topics.INVALID_SETPOINT, *cur, *topics.INVALID_SETPOINT)
+        )
 
     # ------------------------------------------------------------------ telemetry
 
     def _home_position(self, t: int) -> Msg:
-        hx, hy, hz, lat, lon, alt, yaw = self.home
+        hx, hy, hz, lat, lon, alt, _ = self.home
         return Msg(
             "HOME_POSITION",
-            {"latitude": round(lat * 1e7), "longitude": round(lon * 1e7), "altitude": round(alt * 1000),
-             "x": hx, "y": hy, "z": hz, "q": [1.0, 0.0, 0.0, 0.0], "approach_x": 0.0, "approach_y": 0.0,
-             "approach_z": 0.0, "time_usec": t},
+            {
+                "latitude": round(lat * 1e7),
+                "longitude": round(lon * 1e7),
+                "altitude": round(alt * 1000),
+                "x": hx,
+                "y": hy,
+                "z": hz,
+                "q": [1.0, 0.0, 0.0, 0.0],
+                "approach_x": 0.0,
+                "approach_y": 0.0,
+                "approach_z": 0.0,
+                "time_usec": t,
+            },
         )
 
     def _autopilot_version(self) -> Msg:
@@ -714,10 +829,20 @@ class Vehicle:
         caps = 1 | 2 | 4 | 8 | 16 | 128 | 256 | 8192 | 16384 | 32768
         return Msg(
             "AUTOPILOT_VERSION",
-            {"capabilities": caps, "flight_sw_version": SW_VERSION, "middleware_sw_version": SW_VERSION,
-             "os_sw_version": 0, "board_version": 0, "flight_custom_version": [0] * 8,
-             "middleware_custom_version": [0] * 8, "os_custom_version": [0] * 8, "vendor_id": 0,
-             "product_id": 0, "uid": 1 + self.config.seed, "uid2": [0] * 18},
+            {
+                "capabilities": caps,
+                "flight_sw_version": SW_VERSION,
+                "middleware_sw_version": SW_VERSION,
+                "os_sw_version": 0,
+                "board_version": 0,
+                "flight_custom_version": [0] * 8,
+                "middleware_custom_version": [0] * 8,
+                "os_custom_version": [0] * 8,
+                "vendor_id": 0,
+                "product_id": 0,
+                "uid": 1 + self.config.seed,
+                "uid2": [0] * 18,
+            },
         )
 
     def landed_state(self) -> LandedState:
@@ -733,19 +858,49 @@ class Vehicle:
         b, e, st = self.body, self.est, self.st
         ms = t // 1000
         if name == "LOCAL_POSITION_NED":
-            return Msg("LOCAL_POSITION_NED", {"time_boot_ms": ms, "x": st.x, "y": st.y, "z": st.z,
-                                              "vx": b.vx + e.evx, "vy": b.vy + e.evy, "vz": b.vz + e.evz})
+            return Msg(
+                "LOCAL_POSITION_NED",
+                {
+                    "time_boot_ms": ms,
+                    "x": st.x,
+                    "y": st.y,
+                    "z": st.z,
+                    "vx": b.vx + e.evx,
+                    "vy": b.vy + e.evy,
+                    "vz": b.vz + e.evz,
+                },
+            )
         if name == "ATTITUDE":
             roll, pitch = b.tilt()
-            return Msg("ATTITUDE", {"time_boot_ms": ms, "roll": roll, "pitch": pitch, "yaw": st.yaw,
-                                    "rollspeed": 0.0, "pitchspeed": 0.0, "yawspeed": b.yawrate})
+            return Msg(
+                "ATTITUDE",
+                {
+                    "time_boot_ms": ms,
+                    "roll": roll,
+                    "pitch": pitch,
+                    "yaw": st.yaw,
+                    "rollspeed": 0.0,
+                    "pitchspeed": 0.0,
+                    "yawspeed": b.yawrate,
+                },
+            )
         if name == "GLOBAL_POSITION_INT":
             lat, lon = self.proj.reproject(st.x, st.y)
             hdg = round(math.degrees(st.yaw) * 100) % 36000
-            return Msg("GLOBAL_POSITION_INT", {
-                "time_boot_ms": ms, "lat": round(lat * 1e7), "lon": round(lon * 1e7),
-                "alt": round((self.home_alt - st.z) * 1000), "relative_alt": round((self.home[2] - st.z) * 1000),
-                "vx": round(b.vx * 100), "vy": round(b.vy * 100), "vz": round(b.vz * 100), "hdg": hdg})
+            return Msg(
+                "GLOBAL_POSITION_INT",
+                {
+                    "time_boot_ms": ms,
+                    "lat": round(lat * 1e7),
+                    "lon": round(lon * 1e7),
+                    "alt": round((self.home_alt - st.z) * 1000),
+                    "relative_alt": round((self.home[2] - st.z) * 1000),
+                    "vx": round(b.vx * 100),
+                    "vy": round(b.vy * 100),
+                    "vz": round(b.vz * 100),
+                    "hdg": hdg,
+                },
+            )
         if name == "HEARTBEAT":
             if self.crashed:
                 state = MavState.EMERGENCY
@@ -755,20 +910,41 @@ class Vehicle:
                 state = MavState.ACTIVE
             else:
                 state = MavState.STANDBY if self.ready else MavState.BOOT
-            return Msg("HEARTBEAT", {
-                "type": mav.MAV_TYPE_QUADROTOR, "autopilot": mav.MAV_AUTOPILOT_PX4,
-                "base_mode": base_mode_flags(self.nav_state, self.armed), "custom_mode": custom_mode(self.nav_state),
-                "system_status": int(state), "mavlink_version": 3})
+            return Msg(
+                "HEARTBEAT",
+                {
+                    "type": mav.MAV_TYPE_QUADROTOR,
+                    "autopilot": mav.MAV_AUTOPILOT_PX4,
+                    "base_mode": base_mode_flags(self.nav_state, self.armed),
+                    "custom_mode": custom_mode(self.nav_state),
+                    "system_status": int(state),
+                    "mavlink_version": 3,
+                },
+            )
         if name == "EXTENDED_SYS_STATE":
             return Msg("EXTENDED_SYS_STATE", {"vtol_state": 0, "landed_state": int(self.landed_state())})
         if name == "SYS_STATUS":
-            health = mav.SYS_STATUS_SENSORS | (mav.SYS_STATUS_PREARM_CHECK if self.ready and not self.crashed else 0)
-            return Msg("SYS_STATUS", {
-                "onboard_control_sensors_present": mav.SYS_STATUS_SENSORS | mav.SYS_STATUS_PREARM_CHECK,
-                "onboard_control_sensors_enabled": mav.SYS_STATUS_SENSORS | mav.SYS_STATUS_PREARM_CHECK,
-                "onboard_control_sensors_health": health, "load": 100, "voltage_battery": 16200,
-                "current_battery": 1000 if self.armed else 100, "battery_remaining": 100, "drop_rate_comm": 0,
-                "errors_comm": 0, "errors_count1": 0, "errors_count2": 0, "errors_count3": 0, "errors_count4": 0})
+            health = mav.SYS_STATUS_SENSORS & ~mav.SYS_STATUS_GPS
+            if self.ready:
+                health |= mav.SYS_STATUS_GPS | (0 if self.crashed else mav.SYS_STATUS_PREARM_CHECK)
+            return Msg(
+                "SYS_STATUS",
+                {
+                    "onboard_control_sensors_present": mav.SYS_STATUS_SENSORS | mav.SYS_STATUS_PREARM_CHECK,
+                    "onboard_control_sensors_enabled": mav.SYS_STATUS_SENSORS | mav.SYS_STATUS_PREARM_CHECK,
+                    "onboard_control_sensors_health": health,
+                    "load": 100,
+                    "voltage_battery": 16200,
+                    "current_battery": 1000 if self.armed else 100,
+                    "battery_remaining": 100,
+                    "drop_rate_comm": 0,
+                    "errors_comm": 0,
+                    "errors_count1": 0,
+                    "errors_count2": 0,
+                    "errors_count3": 0,
+                    "errors_count4": 0,
+                },
+            )
         if name == "SYSTEM_TIME":
             return Msg("SYSTEM_TIME", {"time_unix_usec": 0, "time_boot_ms": ms})
         if name == "HOME_POSITION":
@@ -776,23 +952,66 @@ class Vehicle:
         if name == "MISSION_CURRENT":
             nav = self.nav
             total = len(nav.mission)
-            state = 1 if total == 0 else 5 if nav.finished else 3 if self.nav_state == NavState.AUTO_MISSION else 2
-            return Msg("MISSION_CURRENT", {"seq": min(nav.current, 65535), "total": total, "mission_state": state,
-                                           "mission_mode": int(self.nav_state == NavState.AUTO_MISSION)})
+            state = (
+                1
+                if total == 0
+                else 5
+                if nav.finished
+                else 3
+                if self.nav_state == NavState.AUTO_MISSION
+                else 2
+            )
+            return Msg(
+                "MISSION_CURRENT",
+                {
+                    "seq": min(nav.current, 65535),
+                    "total": total,
+                    "mission_state": state,
+                    "mission_mode": int(self.nav_state == NavState.AUTO_MISSION),
+                },
+            )
         if name == "VFR_HUD":
-            return Msg("VFR_HUD", {"airspeed": math.hypot(b.vx - self.wind.n, b.vy - self.wind.e),
-                                   "groundspeed": math.hypot(b.vx, b.vy),
-                                   "heading": round(math.degrees(st.yaw)) % 360,
-                                   "throttle": 50 if b.motors else 0, "alt": self.home_alt - st.z, "climb": -b.vz})
+            return Msg(
+                "VFR_HUD",
+                {
+                    "airspeed": math.hypot(b.vx - self.wind.n, b.vy - self.wind.e),
+                    "groundspeed": math.hypot(b.vx, b.vy),
+                    "heading": round(math.degrees(st.yaw)) % 360,
+                    "throttle": 50 if b.motors else 0,
+                    "alt": self.home_alt - st.z,
+                    "climb": -b.vz,
+                },
+            )
         if name == "BATTERY_STATUS":
-            return Msg("BATTERY_STATUS", {
-                "id": 0, "battery_function": 1, "type": 1, "temperature": 32767, "voltages": [16200] + [65535] * 9,
-                "current_battery": 1000 if self.armed else 100, "current_consumed": -1, "energy_consumed": -1,
-                "battery_remaining": 100})
+            return Msg(
+                "BATTERY_STATUS",
+                {
+                    "id": 0,
+                    "battery_function": 1,
+                    "type": 1,
+                    "temperature": 32767,
+                    "voltages": [16200] + [65535] * 9,
+                    "current_battery": 1000 if self.armed else 100,
+                    "current_consumed": -1,
+                    "energy_consumed": -1,
+                    "battery_remaining": 100,
+                },
+            )
         if name == "GPS_RAW_INT":
             lat, lon = self.proj.reproject(b.x, b.y)
-            return Msg("GPS_RAW_INT", {
-                "time_usec": t, "fix_type": 3 if self.ready else 0, "lat": round(lat * 1e7), "lon": round(lon * 1e7),
-                "alt": round((self.home_alt - b.z) * 1000), "eph": 70, "epv": 100,
-                "vel": round(math.hypot(b.vx, b.vy) * 100), "cog": 0, "satellites_visible": 12})
+            return Msg(
+                "GPS_RAW_INT",
+                {
+                    "time_usec": t,
+                    "fix_type": 3 if self.ready else 0,
+                    "lat": round(lat * 1e7),
+                    "lon": round(lon * 1e7),
+                    "alt": round((self.home_alt - b.z) * 1000),
+                    "eph": 70,
+                    "epv": 100,
+                    "vel": round(math.hypot(b.vx, b.vy) * 100),
+                    "cog": 0,
+                    "satellites_visible": 12,
+                },
+            )
         raise KeyError(name)

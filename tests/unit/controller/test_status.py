@@ -223,3 +223,14 @@ def test_status_wire_form_round_trips() -> None:
     wire = st.dump()
     assert "runId" in wire and "observedGeneration" in wire
     assert UavTestStatus.model_validate(wire) == st
+
+
+def test_a_finished_pod_the_job_has_not_recorded_yet_is_still_running() -> None:
+    # the job controller lags behind its pods under load: such a replica is neither pending nor done
+    st = status(
+        job_body(active=2), [pod_body(0, "Succeeded", exit_code=0), pod_body(1, "Failed", exit_code=1)]
+    )
+    assert (st.running, st.pending, st.passed, st.failed) == (2, 2, 0, 0)
+    assert st.phase == "Running"
+    retry = status(job_body(active=1), [pod_body(0, "Failed", exit_code=3)], replicas=1)
+    assert (retry.running, retry.pending) == (0, 1)  # exit 3 is retried: a new pod will come

@@ -50,7 +50,9 @@ def test_same_seed_same_trajectory(mission2):
 def test_different_seeds_differ(mission2):
     config, items = mission2
     a = fly_mission(config, items)
-    other = SimConfig(home=config.home, obstacles=config.obstacles, wind=config.wind, params=config.params, seed=7)
+    other = SimConfig(
+        home=config.home, obstacles=config.obstacles, wind=config.wind, params=config.params, seed=7
+    )
     b = fly_mission(other, items)
     assert a.samples != b.samples
     assert a.flight_time != b.flight_time

@@ -21,12 +21,26 @@ def test_custom_mode_packs_main_in_bits_16_23_and_sub_in_24_31():
 def test_px4_numbers():
     assert (MainMode.AUTO, MainMode.OFFBOARD, MainMode.STABILIZED) == (4, 6, 7)
     assert (AutoSubMode.TAKEOFF, AutoSubMode.LOITER, AutoSubMode.LAND, AutoSubMode.PRECLAND) == (2, 3, 6, 9)
-    assert (NavState.AUTO_MISSION, NavState.AUTO_LOITER, NavState.AUTO_TAKEOFF, NavState.AUTO_LAND) == (3, 4, 17, 18)
+    assert (NavState.AUTO_MISSION, NavState.AUTO_LOITER, NavState.AUTO_TAKEOFF, NavState.AUTO_LAND) == (
+        3,
+        4,
+        17,
+        18,
+    )
 
 
 def test_every_flown_mode_round_trips_through_custom_mode():
-    for ns in (NavState.MANUAL, NavState.ALTCTL, NavState.POSCTL, NavState.AUTO_MISSION, NavState.AUTO_LOITER,
-               NavState.AUTO_RTL, NavState.AUTO_TAKEOFF, NavState.AUTO_LAND, NavState.STAB):
+    for ns in (
+        NavState.MANUAL,
+        NavState.ALTCTL,
+        NavState.POSCTL,
+        NavState.AUTO_MISSION,
+        NavState.AUTO_LOITER,
+        NavState.AUTO_RTL,
+        NavState.AUTO_TAKEOFF,
+        NavState.AUTO_LAND,
+        NavState.STAB,
+    ):
         assert nav_state_from_custom_mode(*split_custom_mode(custom_mode(ns))) == ns
 
 

@@ -21,7 +21,12 @@ def test_px4_defaults_and_types():
 
 
 def _set(proto: ParamProtocol, name: str, value: float, ptype: int) -> Msg:
-    msg = Msg("PARAM_SET", {"target_system": 1, "param_id": name, "param_value": value, "param_type": ptype}, 255, 190)
+    msg = Msg(
+        "PARAM_SET",
+        {"target_system": 1, "param_id": name, "param_value": value, "param_type": ptype},
+        255,
+        190,
+    )
     (reply,) = proto.handle(msg) or []
     return reply
 

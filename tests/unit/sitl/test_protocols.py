@@ -5,8 +5,20 @@ GCS = (255, 190)
 
 
 def _item(seq: int, command: int = MavCmd.NAV_WAYPOINT, frame: int = MavFrame.GLOBAL_RELATIVE_ALT_INT) -> Msg:
-    return Msg("MISSION_ITEM_INT", {"seq": seq, "command": command, "frame": frame, "x": 473977420 + seq,
-                                    "y": 85455940, "z": 10.0, "autocontinue": 1, "mission_type": 0}, *GCS)
+    return Msg(
+        "MISSION_ITEM_INT",
+        {
+            "seq": seq,
+            "command": command,
+            "frame": frame,
+            "x": 473977420 + seq,
+            "y": 85455940,
+            "z": 10.0,
+            "autocontinue": 1,
+            "mission_type": 0,
+        },
+        *GCS,
+    )
 
 
 def _upload(proto: MissionProtocol, items: list[Msg]) -> list[Msg]:

@@ -12,8 +12,15 @@ from uavtest.sitl.main import FileLogSink
 from uavtest.sitl.recorder import MemorySink
 
 PX4_TOPICS = {
-    "vehicle_local_position", "vehicle_global_position", "vehicle_status", "vehicle_land_detected",
-    "vehicle_command", "position_setpoint_triplet", "vehicle_attitude", "mission_result", "home_position",
+    "vehicle_local_position",
+    "vehicle_global_position",
+    "vehicle_status",
+    "vehicle_land_detected",
+    "vehicle_command",
+    "position_setpoint_triplet",
+    "vehicle_attitude",
+    "mission_result",
+    "home_position",
 }
 
 
@@ -34,13 +41,32 @@ def test_px4_topics_and_fields(flown):
     names = {d.name for d in ulog.data_list}
     assert names >= PX4_TOPICS
     lp = ulog.get_dataset("vehicle_local_position").data
-    assert {"timestamp", "x", "y", "z", "vx", "vy", "vz", "heading", "xy_valid", "z_valid", "ref_lat"} <= lp.keys()
+    assert {
+        "timestamp",
+        "x",
+        "y",
+        "z",
+        "vx",
+        "vy",
+        "vz",
+        "heading",
+        "xy_valid",
+        "z_valid",
+        "ref_lat",
+    } <= lp.keys()
     assert (lp["timestamp"][1:] > lp["timestamp"][:-1]).all()
     assert lp["z"].min() < -9.5
     status = ulog.get_dataset("vehicle_status").data
     assert {1, 2} <= set(status["arming_state"]) and 3 in set(status["nav_state"])  # armed, AUTO_MISSION
     triplet = ulog.get_dataset("position_setpoint_triplet").data
-    assert {"current.lat", "current.lon", "current.alt", "current.valid", "next.valid", "previous.type"} <= triplet.keys()
+    assert {
+        "current.lat",
+        "current.lon",
+        "current.alt",
+        "current.valid",
+        "next.valid",
+        "previous.type",
+    } <= triplet.keys()
     assert ulog.get_dataset("vehicle_attitude").data["q[0]"].size > 0
 
 

@@ -42,7 +42,9 @@ def test_unsupported_commands_get_unsupported():
 def test_takeoff_climbs_to_mis_takeoff_alt_then_holds():
     v = ready_vehicle()
     command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
-    assert command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, math.nan) == MavResult.ACCEPTED
+    assert (
+        command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, math.nan) == MavResult.ACCEPTED
+    )
     v.fly_until(lambda v: v.nav_state == NavState.AUTO_LOITER and not v.landed, 30_000_000)
     v.advance(v.time_us + 5_000_000)
     assert abs(-v.body.z - 2.5) < 0.5  # MIS_TAKEOFF_ALT default

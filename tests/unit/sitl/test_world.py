@@ -16,8 +16,9 @@ def test_box_contains_agrees_with_the_analysis_geometry():
     for _ in range(20):
         o = Obstacle(
             size=BoxSize(l=rng.uniform(1, 10), w=rng.uniform(1, 10), h=rng.uniform(1, 20)),
-            position=BoxPosition(x=rng.uniform(-5, 5), y=rng.uniform(-5, 5), z=rng.uniform(0, 3),
-                                 r=rng.uniform(-180, 180)),
+            position=BoxPosition(
+                x=rng.uniform(-5, 5), y=rng.uniform(-5, 5), z=rng.uniform(0, 3), r=rng.uniform(-180, 180)
+            ),
         )
         box = Box.of(0, o)
         for _ in range(200):

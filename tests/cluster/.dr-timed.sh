@@ -1,0 +1,86 @@
+#!/bin/bash
+# down-real.sh DIR [--purge] : stop the real node of up-real.sh DIR and then the control plane (down.sh), and
+# undo what kubelet/containerd did to the host: container processes and shims, mounts under DIR, network
+# namespaces, the CNI bridge, the k8s.io cgroups, the few hard-coded host paths, the sysctls kubelet tuned.
+# Host-wide clean-up happens only if this cluster held the host's real node (see up-real.sh), so it never
+# touches another session's running node. Safe to run twice, or after a failed up-real.sh.
+set -uo pipefail   # no -e: clean up as much as possible, whatever fails
+. "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
+D=${1:?usage: down-real.sh DIR [--purge]}
+[ -d "$D" ] || exit 0
+D=$(cd "$D" && pwd); load_ports "$D"
+C=$D/ctr
+K() { "$BIN/kubectl" --kubeconfig="$D/kubeconfig" --request-timeout=5s "$@"; }
+CTR=("$DEBX/usr/bin/ctr" --address "$C/containerd.sock" -n k8s.io)
+ctr_ok() { [ -S "$C/containerd.sock" ] && timeout 5 "${CTR[@]}" version >/dev/null 2>&1; }
+no_tasks() { [ -z "$(timeout 5 "${CTR[@]}" tasks ls -q 2>/dev/null)" ]; }
+t0=$(now)
+owner=""; [ -f "$REAL_NODE_OWNER" ] && read -r owner _ < "$REAL_NODE_OWNER"
+OWNED=0; { [ "$owner" = "$D" ] || [ -z "$owner" ]; } && [ -f "$D/host-state.txt" ] && OWNED=1
+
+log "T $(since $t0) step 1"; # nothing may create or schedule new pods: stop kcm (Job controller) and scheduler first
+stop_pidfile "$D/kcm.pid" "$D/scheduler.pid"
+log "T $(since $t0) step 2"; # let kubelet stop every pod the proper way (containers, sandboxes, netns), for up to 30 s
+if [ -f "$D/kubelet.pid" ] && [ -f "$D/apiserver.pid" ]; then
+  K delete pods --all -A --grace-period=0 --force --wait=false >/dev/null 2>&1
+  ctr_ok && wait_for 30 no_tasks
+fi
+stop_pidfile "$D/kubelet.pid"
+log "T $(since $t0) step 3"; # whatever still runs: kill its tasks through containerd, then stop containerd
+if ctr_ok; then
+  for t in $(timeout 5 "${CTR[@]}" tasks ls -q 2>/dev/null); do
+    timeout 5 "${CTR[@]}" tasks kill -a -s SIGKILL "$t" >/dev/null 2>&1
+  done
+  wait_for 10 no_tasks
+fi
+stop_pidfile "$D/containerd.pid"
+log "T $(since $t0) step 4"; # leftovers by PID: container inits recorded in containerd's state dir, then shims (their command line names
+#    our containerd socket, which lives in DIR)
+for f in "$C"/state/io.containerd.runtime.v2.task/*/*/init.pid; do
+  [ -f "$f" ] && kill -9 "$(cat "$f")" 2>/dev/null
+done
+for p in /proc/[0-9]*; do
+  cmd=$(tr '\0' ' ' 2>/dev/null < "$p/cmdline")
+  [[ $cmd == *"-address $C/containerd.sock"* ]] && kill -9 "${p#/proc/}" 2>/dev/null
+done
+sleep 0.2
+log "T $(since $t0) step 5"; # mounts under DIR, deepest first
+grep -F " $D/" /proc/self/mountinfo | awk '{print $5}' | sort -r | while read -r m; do umount -l "$m" 2>/dev/null; done
+log "T $(since $t0) step 6"; # the control plane
+"$HERE/down.sh" "$D"
+
+if [ "$OWNED" = 1 ]; then
+  # 7. network: pod netns no process uses any more (ours; CRI names them cni-*), and the CNI bridge
+  live=" $(for p in /proc/[0-9]*; do stat -L -c %i "$p/ns/net" 2>/dev/null; done | sort -u | tr '\n' ' ') "
+  for n in /run/netns/cni-*; do
+    [ -e "$n" ] || continue
+    ino=$(stat -L -c %i "$n" 2>/dev/null) || continue
+    [[ $live == *" $ino "* ]] && continue
+    umount -l "$n" 2>/dev/null; rm -f "$n"
+  done
+  BR=$(sed -n 's/^BRIDGE=//p' "$D/host-state.txt" 2>/dev/null)
+  [ -n "$BR" ] && ip link del "$BR" 2>/dev/null
+  # 8. host paths kubelet / containerd 1.6 / libcni hard-code: remove what this run left, dirs only if empty
+  for l in /var/log/containers/*.log; do
+    [ -L "$l" ] && case "$(readlink "$l")" in "$D"/*) rm -f "$l" ;; esac
+  done
+  rm -f /var/lib/kubelet/device-plugins/kubelet.sock /var/lib/cni/results/uavtest-*
+  for d in /var/lib/kubelet/device-plugins /var/lib/kubelet /var/log/containers /var/log/pods /var/lib/cni/results \
+           /var/lib/cni /run/containerd/runc/k8s.io /run/containerd/runc /run/containerd/s /run/containerd/fifo \
+           /run/containerd/io.containerd.runtime.v2.task/k8s.io /run/containerd/io.containerd.runtime.v2.task \
+           /run/containerd /run/netns; do
+    rmdir "$d" 2>/dev/null
+  done
+  # 9. the pod cgroups containerd made (cgroup v1: <controller>/k8s.io, v2: /k8s.io), deepest first, once empty
+  for c in /sys/fs/cgroup/*/k8s.io /sys/fs/cgroup/k8s.io; do
+    [ -d "$c" ] && find "$c" -depth -type d -exec rmdir {} \; 2>/dev/null
+  done
+  # 10. sysctls kubelet changed
+  while read -r kind key val; do
+    [ "$kind" = SYSCTL ] && [ "$(cat "/proc/sys/$key" 2>/dev/null)" != "$val" ] && echo "$val" > "/proc/sys/$key"
+  done < "$D/host-state.txt"
+  [ "$owner" = "$D" ] && rm -f "$REAL_NODE_OWNER"
+fi
+if [ "${2:-}" = --purge ]; then rm -rf "$D"; fi
+log "real node down in $(since "$t0")s"
+exit 0
