@@ -20,6 +20,7 @@ from uavtest.analysis.models import ReplicaResult, Verdict
 from uavtest.analysis.similarity import dtw, frechet
 from uavtest.analysis.trajectory import Trajectory
 from uavtest.analysis.ulog import (
+    crash_reported,
     flight_window,
     log_trajectory,
     mission_progress_from_ulog,
@@ -67,7 +68,9 @@ def build_report(
     flight = full.between(window.start, window.end) if window.took_off else full.between(float("inf"), 0)
     mission = mission_progress_from_ulog(ulog)
     if test is not None:
-        metrics, assertions, verdict, reason = judge(flight, test.spec, mission=mission, reference=reference)
+        metrics, assertions, verdict, reason = judge(
+            flight, test.spec, mission=mission, reference=reference, crash=crash_reported(ulog)
+        )
     else:
         metrics, assertions, verdict, reason = judge_flight(
             flight, Assertions(), mission=mission, reference=reference

@@ -30,6 +30,7 @@ from uavtest.errors import BadInput, MissingFile
 __all__ = [
     "CLIMB_THRESHOLD",
     "FlightWindow",
+    "crash_reported",
     "flight_window",
     "log_trajectory",
     "mission_progress_from_ulog",
@@ -274,3 +275,20 @@ def mission_progress_from_ulog(ulog: ULog) -> MissionProgress | None:
     finished = bool((mr["finished"][valid] != 0).any()) if "finished" in mr else reached >= total
     reached = max(0, min(reached, total))
     return MissionProgress(reached=reached, total=total, finished=finished, source="mission_result")
+
+
+def crash_reported(ulog: ULog) -> str | None:
+    """The first logged message that reports a crash (``crash: ...``), else None.
+
+    The built-in simulator logs ``crash: collided with obstacle N`` when the vehicle body
+    touches a box. The logged estimate may stop a few centimetres short of the box (sensor
+    noise), so this marker, not the geometry alone, decides ``noCollision`` for such logs.
+    PX4 logs carry no such marker; for them the geometry decides.
+    """
+    messages = list(ulog.logged_messages) + [
+        m for tagged in getattr(ulog, "logged_messages_tagged", {}).values() for m in tagged
+    ]
+    for m in sorted(messages, key=lambda m: m.timestamp):
+        if m.message.lower().startswith("crash"):
+            return f"{m.message} (t={m.timestamp / 1e6:.1f} s)"
+    return None

@@ -57,8 +57,12 @@ def judge_flight(
     mission_expected: bool = False,
     reference: Trajectory | None = None,
     vehicle_radius: float = 0.0,
+    crash: str | None = None,
 ) -> tuple[FlightMetrics, list[AssertionResult], Verdict, str]:
     """Measure the flight and check each assertion that applies.
+
+    ``crash``: a crash the log itself reports (``uavtest.analysis.ulog.crash_reported``); it
+    counts as a collision even when the logged estimate stops short of the box.
 
     ``mission_expected``: the test has a mission, so ``missionCompleted`` applies even when
     ``mission`` (the progress) is unknown — then it fails saying so. Without an expected mission,
@@ -76,12 +80,16 @@ def judge_flight(
         d = distances_to_obstacles(trajectory.x, trajectory.y, trajectory.z, obstacles, radius=vehicle_radius)
         metrics.min_obstacle_distance = float(d.min())
         metrics.collision = bool(d.min() <= 0.0)
+    if crash is not None:
+        metrics.collision = True
     if obstacles and assertions.no_collision:
         hit = metrics.collision
         where = ""
-        if hit:
+        if hit and flew and bool((d <= 0.0).any()):
             first = int(np.argmax(d <= 0.0))
             where = f" at t={trajectory.t[first]:.1f} s"
+        elif crash is not None:
+            where = f": the log reports '{crash}'"
         results.append(
             AssertionResult(
                 name="noCollision",
@@ -205,6 +213,7 @@ def judge(
     mission: MissionProgress | None = None,
     reference: Trajectory | None = None,
     vehicle_radius: float = 0.0,
+    crash: str | None = None,
 ) -> tuple[FlightMetrics, list[AssertionResult], Verdict, str]:
     """Metrics, assertion results, verdict (pass / fail) and reason of one flight of ``spec``.
 
@@ -224,4 +233,5 @@ def judge(
         mission_expected=spec.mission is not None,
         reference=reference,
         vehicle_radius=vehicle_radius,
+        crash=crash,
     )

@@ -12,7 +12,12 @@ from pathlib import Path
 
 from uavtest.analysis.models import FlightMetrics, ReplicaResult, Verdict
 from uavtest.analysis.trajectory import Trajectory
-from uavtest.analysis.ulog import mission_progress_from_ulog, read_ulog, trajectory_from_ulog
+from uavtest.analysis.ulog import (
+    crash_reported,
+    mission_progress_from_ulog,
+    read_ulog,
+    trajectory_from_ulog,
+)
 from uavtest.analysis.verdict import judge
 from uavtest.errors import UavTestError
 from uavtest.runner.core import FlightReport
@@ -94,7 +99,11 @@ def analyse(
     except UavTestError as e:
         return error(f"reference log for the similarity assertion: {e}", trajectory)
     metrics, assertions, verdict, reason = judge(
-        trajectory, spec, mission=mission_progress_from_ulog(ulog), reference=reference
+        trajectory,
+        spec,
+        mission=mission_progress_from_ulog(ulog),
+        reference=reference,
+        crash=crash_reported(ulog),
     )
     log.info("verdict %s%s", verdict, f": {reason}" if reason else "")
     return Analysis(
