@@ -8,11 +8,16 @@
 #            files) — rebuilt every time; `uavtest` is on PATH (/usr/local/bin/uavtest -> /opt/uavtest/bin)
 # Layers 2 and 3 are made with an overlay mount + chroot, so pip runs with the image's own python.
 # Writes OUT.tar (default $UAVTEST_CACHE/share/uavtest-runner-dev.tar), an OCI archive for
-# `ctr -n k8s.io images import`. Needs root (debootstrap, mount, chroot).
+# `ctr -n k8s.io images import`. By default OUT.tar is THIN (~2 MB: the project layer only) and OUT.tar.base
+# names the cached base image archive (layers 1+2, "uavtest-runner-base:<key>") that must be imported first:
+# import-image.sh does both, and imports the base only when containerd lacks it. With --full, OUT.tar is a
+# self-contained archive (~850 MB) instead. Needs root (debootstrap, mount, chroot).
 set -euo pipefail
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
-REPO=$(cd "${1:?usage: build-runner-image.sh REPO_ROOT [OUT.tar]}" && pwd)
-OUT=${2:-$SHARE/uavtest-runner-dev.tar}
+FULL=0; ARGS=()
+for a in "$@"; do if [ "$a" = --full ]; then FULL=1; else ARGS+=("$a"); fi; done
+REPO=$(cd "${ARGS[0]:?usage: build-runner-image.sh REPO_ROOT [OUT.tar] [--full]}" && pwd)
+OUT=${ARGS[1]:-$SHARE/uavtest-runner-dev.tar}
 [ "$(id -u)" = 0 ] || { log "build-runner-image.sh needs root (debootstrap, mount, chroot)"; exit 1; }
 IMG=$CACHE/image; mkdir -p "$IMG" "$SHARE" "$(dirname "$OUT")"
 exec 9>"$IMG/.lock"; flock 9   # one image build at a time per cache
@@ -110,7 +115,7 @@ else
   ln -s "$VENV/bin/uavtest" "$M/usr/local/bin/uavtest"   # dangling until layer 3 installs the project
   rm -rf "$M/tmp/wheels" "$M/root/.cache"
   overlay_umount "$M"
-  rm -rf "$WORK/deps/work" "$WORK/deps/wheels"
+  rmdir "$M"; rm -rf "$WORK/deps/work" "$WORK/deps/wheels"
   python3 "$HERE/mkoci.py" layer "$WORK/deps/upper" "$WORK/deps/layer.tar" >/dev/null
   mv "$WORK/deps" "$B"
   log "image layer 2 (dependencies venv): built in $(since "$t0")s"
@@ -145,7 +150,27 @@ rm -rf "$M/tmp/dist" "$M/root/.cache"
 chroot_run "$M" /usr/local/bin/uavtest --help >/dev/null 2>&1 || log "note: 'uavtest --help' fails in the image (CLI not written yet?)"
 overlay_umount "$M"
 python3 "$HERE/mkoci.py" layer "$WORK/proj/upper" "$WORK/proj/layer.tar" >/dev/null
-python3 "$HERE/mkoci.py" image --out "$OUT" --name "$RUNNER_IMAGE_REF" --cmd '["uavtest", "--help"]' \
-  --env "PATH=$IMAGE_PATH" --env "VIRTUAL_ENV=$VENV" --env LANG=C.UTF-8 --env PYTHONUNBUFFERED=1 \
-  "$A/layer.tar" "$B/layer.tar" "$WORK/proj/layer.tar" >/dev/null
+IMAGE_CONFIG=(--env "PATH=$IMAGE_PATH" --env "VIRTUAL_ENV=$VENV" --env LANG=C.UTF-8 --env PYTHONUNBUFFERED=1)
+BASE_REF=docker.io/library/uavtest-runner-base:$KB
+if [ "$FULL" = 1 ]; then
+  python3 "$HERE/mkoci.py" image --out "$OUT" --name "$RUNNER_IMAGE_REF" --cmd '["uavtest", "--help"]' \
+    "${IMAGE_CONFIG[@]}" "$A/layer.tar" "$B/layer.tar" "$WORK/proj/layer.tar" >/dev/null
+  rm -f "$OUT.base"
+else
+  if [ ! -f "$B/base-image.tar" ]; then   # layers 1+2 as an image of their own, made once per layer-2 key
+    python3 "$HERE/mkoci.py" image --out "$B/base-image.tar.tmp" --name "$BASE_REF" --cmd '["python3"]' \
+      "${IMAGE_CONFIG[@]}" "$A/layer.tar" "$B/layer.tar" >/dev/null
+    mv "$B/base-image.tar.tmp" "$B/base-image.tar"
+  fi
+  python3 "$HERE/mkoci.py" image --thin 2 --out "$OUT" --name "$RUNNER_IMAGE_REF" --cmd '["uavtest", "--help"]' \
+    "${IMAGE_CONFIG[@]}" "$A/layer.tar" "$B/layer.tar" "$WORK/proj/layer.tar" >/dev/null
+  echo "$BASE_REF $B/base-image.tar" > "$OUT.base"
+fi
 log "image layer 3 (project wheel) + archive: built in $(since "$t0")s -> $OUT ($(du -h "$OUT" | cut -f1))"
+
+# cache hygiene: layers whose key no checkout used for 3 days go (a dependency change makes a new layer 2)
+touch "$A/.used" "$B/.used" "$BE/.used"
+for d in "$IMG"/base-* "$IMG"/deps-* "$IMG"/buildenv-*; do
+  [ -d "$d" ] && [ -z "$(find "$d/.used" -mtime -3 2>/dev/null)" ] && rm -rf "$d"
+done
+true

@@ -10,7 +10,6 @@ D=${1:?usage: down-real.sh DIR [--purge]}
 [ -d "$D" ] || exit 0
 D=$(cd "$D" && pwd); load_ports "$D"
 C=$D/ctr
-K() { "$BIN/kubectl" --kubeconfig="$D/kubeconfig" --request-timeout=5s "$@"; }
 CTR=("$DEBX/usr/bin/ctr" --address "$C/containerd.sock" -n k8s.io)
 ctr_ok() { [ -S "$C/containerd.sock" ] && timeout 5 "${CTR[@]}" version >/dev/null 2>&1; }
 no_tasks() { [ -z "$(timeout 5 "${CTR[@]}" tasks ls -q 2>/dev/null)" ]; }
@@ -18,22 +17,27 @@ t0=$(now)
 owner=""; [ -f "$REAL_NODE_OWNER" ] && read -r owner _ < "$REAL_NODE_OWNER"
 OWNED=0; { [ "$owner" = "$D" ] || [ -z "$owner" ]; } && [ -f "$D/host-state.txt" ] && OWNED=1
 
-# 1. nothing may create or schedule new pods: stop kcm (Job controller) and scheduler first
-stop_pidfile "$D/kcm.pid" "$D/scheduler.pid"
-# 2. let kubelet stop every pod the proper way (containers, sandboxes, netns), for up to 30 s
-if [ -f "$D/kubelet.pid" ] && [ -f "$D/apiserver.pid" ]; then
-  K delete pods --all -A --grace-period=0 --force --wait=false >/dev/null 2>&1
-  ctr_ok && wait_for 30 no_tasks
-fi
-stop_pidfile "$D/kubelet.pid"
-# 3. whatever still runs: kill its tasks through containerd, then stop containerd
+# 1-2. a throwaway cluster: nothing to drain. Stop whatever makes or runs pods (kcm's Job controller, the
+#      scheduler, kubelet) at once, then kill every container through containerd (the netns, mounts and cgroups
+#      they leave are removed below)
+UAVTEST_STOP_GRACE=0 stop_pidfile "$D/kcm.pid" "$D/scheduler.pid" "$D/kubelet.pid"
+# 3. kill the tasks, remove the containers, stop containerd
 if ctr_ok; then
   for t in $(timeout 5 "${CTR[@]}" tasks ls -q 2>/dev/null); do
     timeout 5 "${CTR[@]}" tasks kill -a -s SIGKILL "$t" >/dev/null 2>&1
   done
+  for t in $(timeout 5 "${CTR[@]}" tasks ls -q 2>/dev/null); do
+    timeout 5 "${CTR[@]}" tasks rm -f "$t" >/dev/null 2>&1
+  done
   wait_for 10 no_tasks
+  # containerd's root persists (images): leave no container records or rw snapshots in it
+  for c in $(timeout 5 "${CTR[@]}" containers ls -q 2>/dev/null); do
+    timeout 10 "${CTR[@]}" containers rm "$c" >/dev/null 2>&1
+    echo "$c" >> "$D/containers-removed.txt"
+  done
 fi
 stop_pidfile "$D/containerd.pid"
+CROOT=$(sed -n 's/^CONTAINERD_ROOT=//p' "$D/host-state.txt" 2>/dev/null)
 # 4. leftovers by PID: container inits recorded in containerd's state dir, then shims (their command line names
 #    our containerd socket, which lives in DIR)
 for f in "$C"/state/io.containerd.runtime.v2.task/*/*/init.pid; do
@@ -44,8 +48,12 @@ for p in /proc/[0-9]*; do
   [[ $cmd == *"-address $C/containerd.sock"* ]] && kill -9 "${p#/proc/}" 2>/dev/null
 done
 sleep 0.2
-# 5. mounts under DIR, deepest first
-grep -F " $D/" /proc/self/mountinfo | awk '{print $5}' | sort -r | while read -r m; do umount -l "$m" 2>/dev/null; done
+# 5. mounts under DIR (and containerd's root), deepest first; CRI's per-container files in the root (if ours)
+for r in "$D" ${CROOT:+"$CROOT"}; do
+  grep -F " $r/" /proc/self/mountinfo | awk '{print $5}' | sort -r | while read -r m; do umount -l "$m" 2>/dev/null; done
+done
+[ "$OWNED" = 1 ] && [ -n "$CROOT" ] && \
+  rm -rf "$CROOT"/io.containerd.grpc.v1.cri/sandboxes/* "$CROOT"/io.containerd.grpc.v1.cri/containers/*
 # 6. the control plane
 "$HERE/down.sh" "$D"
 
@@ -65,6 +73,10 @@ if [ "$OWNED" = 1 ]; then
     [ -L "$l" ] && case "$(readlink "$l")" in "$D"/*) rm -f "$l" ;; esac
   done
   rm -f /var/lib/kubelet/device-plugins/kubelet.sock /var/lib/cni/results/uavtest-*
+  # libcni's cached results of our sandboxes (no CNI DEL ran: their netns went away with the sandboxes)
+  if [ -f "$D/containers-removed.txt" ]; then
+    while read -r c; do rm -f /var/lib/cni/results/*-"$c"-*; done < "$D/containers-removed.txt"
+  fi
   for d in /var/lib/kubelet/device-plugins /var/lib/kubelet /var/log/containers /var/log/pods /var/lib/cni/results \
            /var/lib/cni /run/containerd/runc/k8s.io /run/containerd/runc /run/containerd/s /run/containerd/fifo \
            /run/containerd/io.containerd.runtime.v2.task/k8s.io /run/containerd/io.containerd.runtime.v2.task \

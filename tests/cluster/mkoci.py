@@ -8,9 +8,11 @@ mkoci.py layer [--empty SUBDIR]... DIR OUT.tar
     spec wants. Prints the layer's sha256.
 
 mkoci.py image --out OUT.tar --name NAME[:TAG] [--entrypoint JSON] [--cmd JSON] [--env K=V]...
-               [--workdir DIR] LAYER.tar [LAYER.tar ...]
+               [--workdir DIR] [--thin N] LAYER.tar [LAYER.tar ...]
     Assemble an OCI image layout archive (index.json, oci-layout, blobs) from uncompressed
     layer tars, lowest first, importable with `ctr -n k8s.io images import OUT.tar`.
+    --thin N leaves the blobs of the N lowest layers out: such an archive imports only into a
+    containerd that has them already (e.g. from an image made of those layers).
 """
 
 from __future__ import annotations
@@ -164,7 +166,7 @@ def write_image(args: argparse.Namespace) -> None:
         _add_bytes(tar, "oci-layout", b'{"imageLayoutVersion":"1.0.0"}')
         _add_bytes(tar, "index.json", index)
         seen = set()
-        for path, digest, _ in layers:
+        for path, digest, _ in layers[args.thin :]:
             if digest not in seen:
                 seen.add(digest)
                 tar.add(path, arcname=f"blobs/sha256/{digest}")
@@ -188,6 +190,7 @@ def main(argv: list[str]) -> int:
     ip.add_argument("--cmd")
     ip.add_argument("--env", action="append")
     ip.add_argument("--workdir")
+    ip.add_argument("--thin", type=int, default=0)
     ip.add_argument("layers", nargs="+")
     args = ap.parse_args(argv)
     if args.what == "layer":

@@ -1,7 +1,10 @@
 #!/bin/bash
 # up-real.sh DIR : after `up.sh DIR`, add a REAL node named "localhost": containerd + runc + CNI bridge
 # (Debian packages unpacked by build.sh) and a kubelet. Pods really run; images must be imported first
-# (`ctr -n k8s.io images import`, see import-image.sh) and used with imagePullPolicy: Never.
+# (`ctr -n k8s.io images import`) and used with imagePullPolicy: Never.
+# containerd's root (images, unpacked layers) persists across clusters in $UAVTEST_CONTAINERD_ROOT (default
+# $UAVTEST_CACHE/containerd-root), so importing an image whose layers are there already is quick; its
+# state (tasks, mounts, sockets) lives in DIR. Containers never outlive a cluster (removed on both ends).
 # Needs root. One real node per host at a time (kubelet and containerd hard-code a few host paths).
 # Env: UAVTEST_BRIDGE (default uavtest0), UAVTEST_POD_SUBNET (default 10.244.7.0/24).
 # Stop with down-real.sh DIR, which also undoes what kubelet/containerd changed on the host.
@@ -14,7 +17,7 @@ for f in "$DEBX/usr/bin/containerd" "$DEBX/usr/sbin/runc" "$DEBX/usr/lib/cni/bri
   [ -e "$f" ] || { log "missing $f: run build.sh first"; exit 1; }
 done
 BR=${UAVTEST_BRIDGE:-uavtest0}; SUBNET=${UAVTEST_POD_SUBNET:-10.244.7.0/24}
-C=$D/ctr; KL=$D/kubelet
+C=$D/ctr; KL=$D/kubelet; CROOT=${UAVTEST_CONTAINERD_ROOT:-$CACHE/containerd-root}
 export PATH=$DEBX/usr/bin:$DEBX/usr/sbin:$PATH   # containerd finds containerd-shim-runc-v2 on PATH
 K() { "$BIN/kubectl" --kubeconfig="$D/kubeconfig" "$@"; }
 t0=$(now)
@@ -22,8 +25,11 @@ fail() { log "$1"; for f in "$D/logs/containerd.log" "$D/logs/kubelet.log"; do e
 
 # one real node per host: test sessions sharing the machine take turns (UAVTEST_REAL_NODE_WAIT seconds at most)
 owner_alive() {   # owner_alive DIR UP_REAL_PID : is that cluster's up-real.sh, containerd or kubelet running?
-  kill -0 "$2" 2>/dev/null && return 0
-  for n in kubelet containerd; do [ -f "$1/$n.pid" ] && kill -0 "$(cat "$1/$n.pid")" 2>/dev/null && return 0; done
+  local d=$1 p                # (a live PID whose command line names DIR: PIDs get reused)
+  [ -d "$d" ] || return 1
+  for p in "$2" $(cat "$d/kubelet.pid" "$d/containerd.pid" 2>/dev/null); do
+    [[ $(tr '\0' ' ' 2>/dev/null < "/proc/$p/cmdline") == *"$d"* ]] && return 0
+  done
   return 1
 }
 claim_node() {
@@ -44,6 +50,7 @@ done
 # what down-real.sh must restore or leave alone: kubelet tunes these sysctls on start
 {
   echo "BRIDGE=$BR"
+  echo "CONTAINERD_ROOT=$CROOT"
   for s in vm/overcommit_memory vm/panic_on_oom kernel/panic kernel/panic_on_oops kernel/keys/root_maxkeys \
            kernel/keys/root_maxbytes; do
     [ -r "/proc/sys/$s" ] && echo "SYSCTL $s $(cat "/proc/sys/$s")"
@@ -53,7 +60,7 @@ done
 mkdir -p "$C/cni" "$C/ipam" "$KL" "$D/logs"
 cat > "$C/config.toml" <<EOF
 version = 2
-root = "$C/root"
+root = "$CROOT"
 state = "$C/state"
 # opt would create /opt/containerd on the host; the others are snapshotters we do not use
 disabled_plugins = ["io.containerd.internal.v1.opt", "io.containerd.snapshotter.v1.btrfs",
@@ -121,10 +128,20 @@ registerNode: true
 resolvConf: ""
 EOF
 
-"$DEBX/usr/bin/containerd" --config "$C/config.toml" </dev/null >"$D/logs/containerd.log" 2>&1 &
-echo $! > "$D/containerd.pid"
 CTR=("$DEBX/usr/bin/ctr" --address "$C/containerd.sock" -n k8s.io)
-wait_for 30 "${CTR[@]}" version || fail "containerd did not answer in 30 s"
+start_containerd() {
+  mkdir -p "$CROOT"
+  "$DEBX/usr/bin/containerd" --config "$C/config.toml" </dev/null >>"$D/logs/containerd.log" 2>&1 &
+  echo $! > "$D/containerd.pid"
+  wait_for 30 "${CTR[@]}" version
+}
+if ! start_containerd; then   # a broken persistent root (a run killed mid-write): start afresh once
+  log "containerd did not start; wiping its root $CROOT and retrying"
+  stop_pidfile "$D/containerd.pid"; rm -rf "$CROOT"
+  start_containerd || fail "containerd did not answer in 30 s"
+fi
+# containers of a cluster that died without down-real.sh: remove them (and their snapshots) before kubelet
+for c in $("${CTR[@]}" containers ls -q); do "${CTR[@]}" containers rm "$c" >/dev/null 2>&1 || true; done
 "${CTR[@]}" images import "$SHARE/pause.tar" >/dev/null
 
 "$BIN/kubelet" --config="$KL/config.yaml" --kubeconfig="$D/kubeconfig" --root-dir="$KL/root" \

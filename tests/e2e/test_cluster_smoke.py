@@ -66,3 +66,30 @@ def test_minio_put_get(minio: MinioServer) -> None:
         resp.close()
         resp.release_conn()
     assert [o.object_name for o in client.list_objects(bucket, recursive=True)] == ["a/b/blob.bin"]
+
+
+def test_kwok_cluster_fakes_a_job(kwok_cluster: Cluster, kwok_namespace: str) -> None:
+    job = {
+        "apiVersion": "batch/v1",
+        "kind": "Job",
+        "metadata": {"name": "fake", "namespace": kwok_namespace},
+        "spec": {
+            "completions": 3,
+            "parallelism": 3,
+            "backoffLimit": 0,
+            "template": {
+                "spec": {
+                    "restartPolicy": "Never",
+                    "containers": [{"name": "c", "image": "nothing-pulls-this:0", "command": ["false"]}],
+                }
+            },
+        },
+    }
+    kwok_cluster.apply(job)
+    kwok_cluster.kubectl(
+        "wait", "-n", kwok_namespace, "--for=condition=Complete", "job/fake", "--timeout=60s", timeout=90
+    )
+    nodes = kwok_cluster.kubectl(
+        "get", "pods", "-n", kwok_namespace, "-o", "jsonpath={.items[*].spec.nodeName}"
+    )
+    assert set(nodes.split()) == {kwok_cluster.node_name}

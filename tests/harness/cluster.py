@@ -53,6 +53,7 @@ RUNNER_IMAGE_ARCHIVE = CACHE_DIR / "share" / "uavtest-runner-dev.tar"
 
 BUILD_TIMEOUT = 60 * 60
 UP_TIMEOUT = 5 * 60
+REAL_NODE_TIMEOUT = 20 * 60  # up-real.sh may wait for another session's real node (UAVTEST_REAL_NODE_WAIT)
 DOWN_TIMEOUT = 3 * 60
 PORT_NAMES = (
     "ETCD_PORT",
@@ -113,13 +114,18 @@ def build_binaries(*steps: str) -> str:
     return _run_script("build.sh", *steps, timeout=BUILD_TIMEOUT)
 
 
-def build_runner_image(repo_root: Path | str = REPO_ROOT, out: Path | str | None = None) -> Path:
+def build_runner_image(
+    repo_root: Path | str = REPO_ROOT, out: Path | str | None = None, *, full: bool = False
+) -> Path:
     """Build the runner image archive from REPO_ROOT's working tree; return the OCI archive's path.
 
     The Debian base and the dependency venv layers are cached; the project layer is rebuilt every call.
+    By default the archive is thin (project layer only; `Cluster.import_image` brings the cached base
+    along); full=True writes a self-contained one for any `ctr images import`.
     """
     archive = Path(out) if out else RUNNER_IMAGE_ARCHIVE
-    _run_script("build-runner-image.sh", str(repo_root), str(archive), timeout=BUILD_TIMEOUT)
+    args = [str(repo_root), str(archive), *(["--full"] if full else [])]
+    _run_script("build-runner-image.sh", *args, timeout=BUILD_TIMEOUT)
     return archive
 
 
@@ -261,8 +267,12 @@ class Cluster:
         return proc.stdout
 
     def import_image(self, archive: Path | str) -> None:
-        """Import an OCI archive (e.g. from build_runner_image) into the node's containerd."""
-        self.ctr("images", "import", str(archive))
+        """Import an OCI archive into the node's containerd (tests/cluster/import-image.sh).
+
+        A thin archive from build_runner_image brings its base image along (imported only when missing)."""
+        if not self.real_node:
+            raise ClusterError("no containerd: this cluster has no real node")
+        _run_script("import-image.sh", str(self.dir), str(archive), timeout=UP_TIMEOUT)
 
     # ------------------------------------------------------------------ lifecycle
     def assert_own(self) -> None:
@@ -331,7 +341,7 @@ def start_cluster(
     try:
         _run_script("up.sh", str(d), *(["--kwok"] if kwok else []), env=env, timeout=UP_TIMEOUT)
         if real_node:
-            _run_script("up-real.sh", str(d), env=env, timeout=UP_TIMEOUT)
+            _run_script("up-real.sh", str(d), env=env, timeout=REAL_NODE_TIMEOUT)
         cluster.assert_own()
     except BaseException:
         with contextlib.suppress(Exception):

@@ -72,7 +72,10 @@ def test_near_miss_in_wind_is_flaky(repo_root: Path, tmp_path: Path) -> None:
     assert out.summary["errors"] == 0
     assert 0 < out.summary["flakiness"] < 1 and out.summary["flaky"] is True
     failed = [r for r in out.summary["results"] if r["verdict"] == "fail"]
-    assert all(r["metrics"]["min_obstacle_distance"] < 1.5 for r in failed)
+    not_near_miss = [
+        (r["index"], r["reason"]) for r in failed if r["metrics"]["min_obstacle_distance"] >= 1.5
+    ]
+    assert not not_near_miss, f"replicas that failed for another reason than the near miss: {not_near_miss}"
     assert all(not r["metrics"]["collision"] for r in failed)  # a near miss, not a crash
 
 

@@ -11,9 +11,11 @@ Both kinds of process are handled through the ``Started`` protocol (a subset of 
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import multiprocessing.connection
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -26,6 +28,9 @@ __all__ = ["PRELOAD", "ExecLauncher", "Launcher", "Started", "WarmLauncher", "is
 # Not uavtest.cli itself: when the engine runs as ``python -m uavtest.cli``, each child re-runs
 # that module as ``__mp_main__`` and runpy warns if it is already imported.
 PRELOAD = ["typer", "rich.console", "uavtest.engine.launch", "uavtest.runner.main", "uavtest.sitl.main"]
+
+
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
 
 class Started(Protocol):
@@ -104,9 +109,33 @@ def is_uavtest_cli(argv: list[str]) -> bool:
     return len(argv) >= 3 and argv[1:3] == ["-m", "uavtest.cli"]
 
 
+def _die_with_parent() -> None:
+    """Linux: SIGTERM this process when its parent (the fork server) ends.
+
+    The fork server ends when the engine does, even when the engine is killed, so no
+    simulator is left waiting for lockstep grants that will never come.
+    """
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGTERM)
+    # Each child inherits the fork server's "engine alive" pipe end; the server only notices
+    # the engine is gone once no one holds it, so a replica process must not keep it open.
+    from multiprocessing import forkserver
+
+    server = getattr(forkserver, "_forkserver", None)
+    alive = getattr(server, "_forkserver_alive_fd", None)
+    if isinstance(alive, int):
+        with contextlib.suppress(OSError):
+            os.close(alive)
+        server._forkserver_alive_fd = None  # type: ignore[union-attr]
+
+
 def _run_cli(args: list[str], stdout: str | None, stderr: str, cwd: str | None) -> None:
     """In the forked process: own session and files, then the CLI entry point as ``uavtest``."""
     os.setsid()
+    _die_with_parent()
     fds = (
         os.open(os.devnull, os.O_RDONLY),
         _open_append(Path(stdout) if stdout else None),

@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -210,6 +211,7 @@ class _AttemptEnd:
     note: str = ""  # why the engine stopped the runner (timeout, simulator died, cancelled)
     sim_note: str = ""  # the simulator exited by itself with an error before the runner ended
     cancelled: bool = False
+    sim: Started | None = None  # the simulator, when it was still running after the runner
 
 
 def _signal(proc: Started, sig: signal.Signals) -> None:
@@ -295,11 +297,28 @@ def _fly(
     finally:
         if runner.poll() is None:
             _stop(runner)
-        sim_alive = sim.poll() is None
-        end.sim_code = _stop(sim)
-        if not sim_alive and end.sim_code not in (0, None):
+        end.sim_code = sim.poll()
+        if end.sim_code is None:
+            end.sim = sim  # still running: the caller stops it
+        elif end.sim_code != 0:
             end.sim_note = f"simulator exited with code {end.sim_code}: {_tail(files.sim_err)}"
     return end
+
+
+def _stop_in_background(proc: Started, log_dir: Path) -> None:
+    """SIGTERM the simulator now; wait for it and remove its log folder off the replica's clock.
+
+    The wait (the simulator closes its log and exits) costs no CPU, so the replica's slot is
+    given to the next replica at once. The thread is not a daemon: the engine does not exit
+    before every simulator has.
+    """
+    _signal(proc, signal.SIGTERM)
+
+    def finish() -> None:
+        _stop(proc)
+        shutil.rmtree(log_dir, ignore_errors=True)
+
+    threading.Thread(target=finish, name=f"stop-sim-{proc.pid}", daemon=False).start()
 
 
 # --------------------------------------------------------------------------- results
@@ -408,11 +427,15 @@ def run_replica(
     for attempt in range(1, job.retries + 2):
         attempts = attempt
         status(job.index, "flying" if attempt == 1 else f"flying (attempt {attempt})")
-        with (
-            ports.lease(px4=job.simulator == Simulator.PX4) as p,
-            tempfile.TemporaryDirectory(prefix=f"uavtest-replica-{job.index}-") as tmp,
-        ):
-            end = _fly(plan(job, p, Path(tmp)), files, attempt, job, launcher, cancel)
+        log_dir = Path(tempfile.mkdtemp(prefix=f"uavtest-replica-{job.index}-"))
+        with ports.lease(px4=job.simulator == Simulator.PX4) as p:
+            end = _fly(plan(job, p, log_dir), files, attempt, job, launcher, cancel)
+            if end.sim is not None and job.simulator == Simulator.BUILTIN and not end.cancelled:
+                _stop_in_background(end.sim, log_dir)
+            else:  # PX4 holds its instance's ports until it has exited
+                if end.sim is not None:
+                    end.sim_code = _stop(end.sim)
+                shutil.rmtree(log_dir, ignore_errors=True)
         if end.cancelled:
             history.reasons.append("cancelled")
             break

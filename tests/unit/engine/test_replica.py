@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -108,7 +109,11 @@ def test_pass_reads_result_from_store_and_stops_the_simulator(tmp_path: Path) ->
     )
     assert result.verdict == Verdict.PASS and result.attempts == 1 and result.seed == 42
     assert result.wall_time is not None and result.wall_time > 0
-    assert not _pid_alive(int((tmp_path / "sim.pid").read_text()))
+    sim_pid = int((tmp_path / "sim.pid").read_text())
+    deadline = time.monotonic() + 30  # the simulator is stopped (reaped) off the replica's clock
+    while _pid_alive(sim_pid) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert not _pid_alive(sim_pid)
     assert statuses[0] == "flying" and statuses[-1] == "pass"
     assert "runner attempt 1 on stderr" in (tmp_path / "out" / "runner.stderr.log").read_text()
     assert "sim up" in (tmp_path / "out" / "sim.stderr.log").read_text()
