@@ -150,7 +150,13 @@ def runner(
     ] = None,
     timeout: Annotated[float | None, typer.Option(help="vehicle seconds the flight may take")] = None,
     connect_timeout: Annotated[float, typer.Option(help="wall seconds to wait for a heartbeat")] = 30.0,
-    step_ms: Annotated[int, typer.Option(help="lockstep grant size, vehicle milliseconds")] = 50,
+    step_ms: Annotated[
+        int,
+        typer.Option(
+            help="largest lockstep grant, vehicle milliseconds (shorter ones while commands run, "
+            "sticks stream or an obstacle is near)"
+        ),
+    ] = 1000,
 ) -> None:
     """Fly one replica against a MAVLink vehicle; store flight.ulg, trajectory.csv, result.json."""
     from uavtest.runner.main import run_replica_command
@@ -191,6 +197,13 @@ def sitl(
         bool, typer.Option("--lockstep", help="advance the clock only when a client grants time")
     ] = False,
     speed_factor: Annotated[float, typer.Option(help="free-running speed, 1 = real time")] = 1.0,
+    idle_exit: Annotated[
+        float,
+        typer.Option(
+            help="lockstep: exit (log closed) after this many wall seconds without client traffic "
+            "once a client was heard (0 = never); also exits when the parent process dies"
+        ),
+    ] = 60.0,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="log to stderr")] = False,
 ) -> None:
     """Run the built-in PX4-compatible simulator (MAVLink 2 over UDP) until SIGTERM."""
@@ -212,6 +225,7 @@ def sitl(
             log_dir=log_dir,
             lockstep=lockstep,
             speed_factor=speed_factor,
+            idle_exit_s=idle_exit,
         )
     )
 

@@ -64,6 +64,11 @@ else
     (cd "$DB/pkgs" && { apt-get download debootstrap >/dev/null 2>&1 || { apt-get update -qq >/dev/null; apt-get download debootstrap >/dev/null; }; })
     dpkg-deb -x "$DB"/pkgs/debootstrap_*.deb "$DB/x"
   fi
+  if ! command -v wget >/dev/null; then   # debootstrap downloads with wget
+    log "installing wget (debootstrap needs it)"
+    apt-get install -y -qq --no-install-recommends wget >/dev/null 2>&1 || \
+      { apt-get update -qq >/dev/null; apt-get install -y -qq --no-install-recommends wget >/dev/null; }
+  fi
   MIRROR=${UAVTEST_DEBIAN_MIRROR:-}
   if [ -z "$MIRROR" ]; then   # the host's own Debian mirror, else deb.debian.org
     MIRROR=$(cat /etc/apt/sources.list.d/*.sources 2>/dev/null | awk '/^URIs:/ {print $2}' | grep -v security | head -n1 || true)

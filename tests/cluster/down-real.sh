@@ -14,8 +14,19 @@ CTR=("$DEBX/usr/bin/ctr" --address "$C/containerd.sock" -n k8s.io)
 ctr_ok() { [ -S "$C/containerd.sock" ] && timeout 5 "${CTR[@]}" version >/dev/null 2>&1; }
 no_tasks() { [ -z "$(timeout 5 "${CTR[@]}" tasks ls -q 2>/dev/null)" ]; }
 t0=$(now)
+# the host's real node stays ours (see up-real.sh) until this script has finished cleaning up the host:
+# the owner record names this script's PID meanwhile, and is removed only at the very end
+lockdir=/run/lock; [ -d $lockdir ] || lockdir=/run
+exec 8<"$lockdir"; flock 8
 owner=""; [ -f "$REAL_NODE_OWNER" ] && read -r owner _ < "$REAL_NODE_OWNER"
 OWNED=0; { [ "$owner" = "$D" ] || [ -z "$owner" ]; } && [ -f "$D/host-state.txt" ] && OWNED=1
+if [ "$OWNED" = 1 ] && [ -z "$owner" ]; then   # no record: ours only if no other kubelet runs
+  for p in $(pgrep -x kubelet || true); do
+    [[ $(tr '\0' ' ' 2>/dev/null < "/proc/$p/cmdline") == *"$D/"* ]] || OWNED=0
+  done
+fi
+[ "$OWNED" = 1 ] && echo "$D $$" > "$REAL_NODE_OWNER"
+exec 8<&-
 
 # 1-2. a throwaway cluster: nothing to drain. Stop whatever makes or runs pods (kcm's Job controller, the
 #      scheduler, kubelet) at once, then kill every container through containerd (the netns, mounts and cgroups
@@ -91,7 +102,10 @@ if [ "$OWNED" = 1 ]; then
   while read -r kind key val; do
     [ "$kind" = SYSCTL ] && [ "$(cat "/proc/sys/$key" 2>/dev/null)" != "$val" ] && echo "$val" > "/proc/sys/$key"
   done < "$D/host-state.txt"
+  exec 8<"$lockdir"; flock 8
+  owner=""; [ -f "$REAL_NODE_OWNER" ] && read -r owner _ < "$REAL_NODE_OWNER"
   [ "$owner" = "$D" ] && rm -f "$REAL_NODE_OWNER"
+  exec 8<&-
 fi
 if [ "${2:-}" = --purge ]; then rm -rf "$D"; fi
 log "real node down in $(since "$t0")s"

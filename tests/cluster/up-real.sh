@@ -38,6 +38,8 @@ claim_node() {
   local other="" opid=""
   [ -f "$REAL_NODE_OWNER" ] && read -r other opid < "$REAL_NODE_OWNER"
   if [ -n "$other" ] && [ "$other" != "$D" ] && owner_alive "$other" "$opid"; then exec 8<&-; return 1; fi
+  # any kubelet at all (another cache's cluster, the host's own) also holds the host
+  if pgrep -x kubelet >/dev/null; then exec 8<&-; return 1; fi
   echo "$D $$" > "$REAL_NODE_OWNER"; exec 8<&-
 }
 waited=0

@@ -113,6 +113,10 @@ def test_a_deleted_replica_pod_is_retried_and_counted_once(
     name = "deleted-pod"
     cluster.apply(hover(name, namespace, replicas=2, parallelism=2))
     selector = f"uavtest.io/test={name},batch.kubernetes.io/job-completion-index=0"
+    # kubectl wait needs the pod to exist first
+    assert cluster.wait_until(
+        lambda: cluster.kubectl("get", "pods", "-n", namespace, "-l", selector, "-o", "name") != "", 300
+    )
     cluster.kubectl(
         "wait",
         "-n",
@@ -124,12 +128,18 @@ def test_a_deleted_replica_pod_is_retried_and_counted_once(
         "--timeout=300s",
         timeout=330,
     )
-    cluster.kubectl("delete", "pod", "-n", namespace, "-l", selector, "--wait=false")
+    deleted = cluster.kubectl("get", "pods", "-n", namespace, "-l", selector, "-o", "name").split()
+    assert len(deleted) == 1
+    cluster.kubectl("delete", "-n", namespace, deleted[0], "--wait=false")
     status = wait_complete(cluster, namespace, name)
     assert (status["replicas"], status["passed"], status["failed"], status["errors"]) == (2, 2, 0, 0), status
     assert sorted(r["index"] for r in status["results"]) == [0, 1]
+    # replica 0 flew again in a new pod, with the same index and seed
+    again = cluster.kubectl_json("get", "pods", "-n", namespace, "-l", selector)["items"]
+    assert [f"pod/{p['metadata']['name']}" for p in again] != deleted
+    assert [p["status"]["phase"] for p in again] == ["Succeeded"]
     job = jobs_of(cluster, namespace, name)[0]
-    assert job["status"].get("failed", 0) >= 1  # the deleted attempt, retried with the same index
+    assert job["status"]["completedIndexes"] == "0,1"
 
 
 def test_minio_unreachable_for_30s_while_replicas_upload_loses_nothing(

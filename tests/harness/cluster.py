@@ -15,6 +15,7 @@ from __future__ import annotations
 import atexit
 import contextlib
 import json
+import logging
 import os
 import shutil
 import signal
@@ -23,7 +24,7 @@ import subprocess
 import tempfile
 import threading
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -42,6 +43,8 @@ __all__ = [
     "start_cluster",
     "terminate_on_sigterm",
 ]
+
+log = logging.getLogger("uavtest.harness")
 
 REPO_ROOT = Path(__file__).resolve().parents[2]
 CLUSTER_SCRIPTS = REPO_ROOT / "tests" / "cluster"
@@ -85,28 +88,42 @@ class KubectlError(ClusterError):
 def _run_script(script: str, *args: str, env: Mapping[str, str] | None = None, timeout: float) -> str:
     """Run tests/cluster/SCRIPT; return its combined output, raise ClusterError with it on failure."""
     cmd = ["bash", str(CLUSTER_SCRIPTS / script), *args]
+    # its own process group: if we are interrupted (Ctrl-C, SIGTERM, timeout) the script and everything it
+    # started so far (go builds, half a control plane) are ended together, not left behind
+    proc = subprocess.Popen(
+        cmd,
+        env={**os.environ, **(env or {})},
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        start_new_session=True,
+    )
     try:
-        proc = subprocess.run(
-            cmd,
-            env={**os.environ, **(env or {})},
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            timeout=timeout,
-            check=False,
-        )
-    except subprocess.TimeoutExpired as e:
-        raise ClusterError(f"{script} timed out after {timeout}s:\n{_text(e.output)}") from e
+        out, _ = proc.communicate(timeout=timeout)
+    except BaseException as e:
+        _kill_group(proc)
+        if isinstance(e, subprocess.TimeoutExpired):
+            raise ClusterError(f"{script} timed out after {timeout}s") from e
+        raise
     if proc.returncode != 0:
-        raise ClusterError(f"{script} {' '.join(args)} failed (exit {proc.returncode}):\n{proc.stdout}")
-    return proc.stdout
+        raise ClusterError(f"{script} {' '.join(args)} failed (exit {proc.returncode}):\n{out}")
+    for line in out.splitlines():  # the scripts' own progress and timing lines
+        if line.startswith("[uavtest-cluster]"):
+            log.info("%s", line)
+    return out
 
 
-def _text(out: str | bytes | None) -> str:
-    if isinstance(out, bytes):
-        return out.decode(errors="replace")
-    return out or ""
+def _kill_group(proc: subprocess.Popen[str]) -> None:
+    """TERM the process group of PROC, give the script up to 5 s, then KILL whatever is left of it."""
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(proc.pid, signal.SIGTERM)
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        proc.wait(5)
+    with contextlib.suppress(ProcessLookupError):
+        os.killpg(proc.pid, signal.SIGKILL)
+    with contextlib.suppress(subprocess.TimeoutExpired):
+        proc.wait(5)
 
 
 def build_binaries(*steps: str) -> str:
@@ -206,8 +223,13 @@ class Cluster:
 
     def create_namespace(self, name: str) -> str:
         self.apply({"apiVersion": "v1", "kind": "Namespace", "metadata": {"name": name}})
+
         # pods are refused until the namespace's default service account exists
-        self.wait_until(lambda: self.kubectl("get", "sa", "default", "-n", name, check=False) != "", 60)
+        def has_sa() -> bool:
+            return self.kubectl("get", "sa", "default", "-n", name, check=False) != ""
+
+        if not self.wait_until(has_sa, 60):
+            raise ClusterError(f"namespace {name}: no default service account after 60 s")
         return name
 
     def delete_namespace(self, name: str, wait: bool = False) -> None:
@@ -233,7 +255,7 @@ class Cluster:
         return phase
 
     @staticmethod
-    def wait_until(pred: Any, timeout: float, interval: float = 0.25) -> bool:
+    def wait_until(pred: Callable[[], object], timeout: float, interval: float = 0.25) -> bool:
         """Poll PRED until true or TIMEOUT seconds have passed; return whether it became true."""
         end = time.monotonic() + timeout
         while True:

@@ -225,3 +225,20 @@ def test_the_same_seed_flies_the_same_trajectory(tmp_path: Path) -> None:
         csv.append(replica.artifact("trajectory.csv").read_text())
     assert csv[0] == csv[1]  # lockstep: identical, sample for sample
     assert csv[0] != csv[2]
+
+
+def test_the_grant_size_changes_the_cost_not_the_flight(tmp_path: Path) -> None:
+    # commands land exactly on their vehicle times and command sequences step in fine grants,
+    # so 50 ms grants (one round trip each) and the default large grants fly the same trajectory
+    spec = {**SHORT_MISSION, "commands": [{"at": 1, "action": "mode", "mode": "mission"}]}
+    spec["commands"].append({"at": 9.37, "action": "speed", "speed": 2.5})
+    fine = make_replica(tmp_path, spec, name="grants", run_id="fine", seed=3)
+    large = make_replica(tmp_path, spec, name="grants", run_id="large", seed=3)
+    grants = []
+    for replica, extra in ((fine, ("--step-ms", "50")), (large, ())):
+        with simulator(replica, tmp_path):
+            _, result, stderr = run_runner(replica, *extra)
+        assert result.verdict is Verdict.PASS, f"{result.reason}\n{stderr[-3000:]}"
+        grants.append(int(stderr.rsplit("; ", 1)[-1].split(" grants")[0]))
+    assert fine.artifact("trajectory.csv").read_text() == large.artifact("trajectory.csv").read_text()
+    assert grants[1] * 4 < grants[0]  # far fewer round trips

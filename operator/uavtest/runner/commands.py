@@ -152,6 +152,19 @@ class CommandScheduler:
         return self._pending[0].at * 1000.0 if self._pending else math.inf
 
     @property
+    def busy(self) -> bool:
+        """A command sequence is running: a step waits for its ACK (not for a retry time), or more
+        steps are queued behind it."""
+        return bool(self._steps) or (self._current is not None and self._retry_at_ms is None)
+
+    @property
+    def next_event_ms(self) -> float:
+        """Vehicle time of the next thing to do on the vehicle clock: a command not yet due or a
+        refused arm's retry (inf when none)."""
+        retry = self._retry_at_ms if self._retry_at_ms is not None else math.inf
+        return min(self.next_at_ms, retry)
+
+    @property
     def ack_deadline(self) -> float:
         return self._ack_deadline
 

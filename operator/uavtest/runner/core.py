@@ -7,8 +7,9 @@ the core ends with a ``FlightReport``. The edge (``uavtest.runner.session``) mov
 Two clocks: protocol retries (params, mission, ACKs) run on the wall clock, because a lockstep
 simulator answers while its clock stands still; commands, GCS heartbeats, the timeout and the
 monitor run on the vehicle clock (time_boot_ms). In lockstep (the simulator announced
-``LOCKSTEP``) the core grants vehicle time in ``step_ms`` steps and does all its flight work
-between grants, so a run is deterministic; setup (params, mission) happens with the clock held.
+``LOCKSTEP``) the core grants vehicle time and does all its flight work between grants, so a run
+is deterministic; setup (params, mission) happens with the clock held. Grants are up to
+``step_ms`` long, shorter only where the runner must act on time (``uavtest.runner.grants``).
 Without announces (real PX4) the vehicle runs on its own and the core follows its telemetry.
 """
 
@@ -42,6 +43,7 @@ from uavtest.runner.events import (
     StatusText,
     VehicleTime,
 )
+from uavtest.runner.grants import DEFAULT_STEP_MS, FINE_MS, grant_until
 from uavtest.runner.logdownload import LogDownloader
 from uavtest.runner.mission import MissionUploader
 from uavtest.runner.monitor import FlightMonitor
@@ -89,7 +91,7 @@ class CoreConfig:
     connect_timeout_s: float = 30.0  # wall seconds until the first heartbeat
     position_timeout_s: float = 120.0  # wall seconds from the heartbeat until a position
     silence_s: float = 10.0  # wall seconds without any message before the vehicle counts as gone
-    step_ms: int = 50  # lockstep grant size
+    step_ms: int = DEFAULT_STEP_MS  # the largest lockstep grant (vehicle ms)
     heartbeat_ms: int = 1000  # GCS heartbeat period
     retry_s: float = 1.0  # protocol retry interval (wall)
     settle_s: float = 3.0  # wall seconds to wait for the disarm after the verdict is settled
@@ -117,6 +119,7 @@ class FlightReport:
     status_texts: list[str] = field(default_factory=list)
     grants: int = 0
     log_data: bytes | None = None
+    flight_wall: tuple[float, float] | None = None  # wall clock at the flight stage's start and end
 
     @property
     def sim_time(self) -> float | None:
@@ -280,7 +283,7 @@ class ReplicaCore:
 
     def _on_announce(self, a: LockstepAnnounce, wall: float) -> list[Outgoing]:
         if not self.report.lockstep:
-            log.info("vehicle runs in lockstep: granting %d ms steps", self.cfg.step_ms)
+            log.info("vehicle runs in lockstep: granting up to %d ms at a time", self.cfg.step_ms)
             self.report.lockstep = True
         if a.time_ms > self.now_ms:
             self.now_ms = a.time_ms
@@ -318,13 +321,20 @@ class ReplicaCore:
 
     def _grant(self) -> LockstepGrant:
         seen = self._waiting_at if self._waiting_at is not None else self.now_ms
-        step = self.cfg.step_ms
-        if self.scheduler.sticks is not None:
-            step = min(step, 100)  # MANUAL_CONTROL at >= 10 Hz of vehicle time
-        nxt = self.scheduler.next_at_ms
-        if seen < nxt < seen + step:
-            step = max(1, math.ceil(nxt - seen))  # land exactly on the next command's time
-        grant = LockstepGrant(seen, seen + step)
+        if self.stage is Stage.FLIGHT:
+            sched, start = self.scheduler, self.report.start_ms
+            timeout_at = math.inf if start is None else start + self.cfg.timeout_s * 1000.0
+            until = grant_until(
+                seen,
+                max_ms=self.cfg.step_ms,
+                busy=sched.busy,
+                sticks=sched.sticks is not None,
+                obstacle_distance=self.monitor.last_distance,
+                next_event_ms=min(sched.next_event_ms, timeout_at, self._last_hb_ms + self.cfg.heartbeat_ms),
+            )
+        else:  # connecting (until the first position) and the last step after the disarm
+            until = grant_until(seen, max_ms=min(self.cfg.step_ms, FINE_MS))
+        grant = LockstepGrant(seen, until)
         self._waiting_at = None
         self._last_grant = grant
         self.report.grants += 1
@@ -359,6 +369,7 @@ class ReplicaCore:
                 self.stage = Stage.FLIGHT
                 self.report.start_ms = self.now_ms
                 self.report.armed_ever = self.armed
+                self.report.flight_wall = (wall, wall)
                 log.info("flight starts at vehicle time %.2f s", self.now_ms / 1000)
                 if self.lockstep and self._waiting_at is not None:
                     out += self._flight_step(wall)
@@ -419,6 +430,8 @@ class ReplicaCore:
         rep = self.report
         rep.ending = ending
         rep.error = error or rep.error
+        if rep.flight_wall is not None:
+            rep.flight_wall = (rep.flight_wall[0], wall)
         self._snapshot()
         log.info(
             "flight ends at vehicle time %.2f s: %s%s",

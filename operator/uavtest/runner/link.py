@@ -58,6 +58,7 @@ __all__ = ["LOCKSTEP_NAME", "MavlinkCodec", "UdpLink", "parse_endpoint"]
 log = logging.getLogger(__name__)
 
 LOCKSTEP_NAME = "LOCKSTEP"
+DATAGRAM_BYTES = 1400  # what one outgoing datagram may hold (PX4 reads datagrams of up to ~1500)
 
 _STX_V2 = 0xFD
 
@@ -308,15 +309,26 @@ class UdpLink:
             out.extend(self.codec.decode(data))
 
     def send(self, messages: Iterable[Outgoing]) -> None:
-        """Send to the vehicle; dropped (with a debug line) until the vehicle has spoken."""
+        """Send to the vehicle, packed into as few datagrams as fit ``DATAGRAM_BYTES`` (in order);
+        dropped (with a debug line) until the vehicle has spoken."""
         sock = self._sock
         assert sock is not None, "open() the link first"
         if self.peer is None:
             return
         encode = self.codec.encode
+        batch = bytearray()
         for msg in messages:
-            try:
-                sock.sendto(encode(msg), self.peer)
-                self.sent += 1
-            except OSError as e:  # the simulator is gone; the core notices its silence
-                log.debug("send %s to %s failed: %s", type(msg).__name__, self.peer, e)
+            frame = encode(msg)
+            if batch and len(batch) + len(frame) > DATAGRAM_BYTES:
+                self._sendto(sock, batch)
+                batch = bytearray()
+            batch += frame
+        if batch:
+            self._sendto(sock, batch)
+
+    def _sendto(self, sock: socket.socket, datagram: bytearray) -> None:
+        try:
+            sock.sendto(datagram, self.peer)  # type: ignore[arg-type]
+            self.sent += 1
+        except OSError as e:  # the simulator is gone; the core notices its silence
+            log.debug("send %d bytes to %s failed: %s", len(datagram), self.peer, e)

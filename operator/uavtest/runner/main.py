@@ -23,6 +23,7 @@ from uavtest.errors import BadInput, ExitCode, InfrastructureError, UavTestError
 from uavtest.runner.analyse import Analysis, analyse
 from uavtest.runner.artifacts import ReplicaPlace, store_artifacts
 from uavtest.runner.core import Ending, FlightReport, ReplicaCore
+from uavtest.runner.grants import DEFAULT_STEP_MS
 from uavtest.runner.link import UdpLink
 from uavtest.runner.logdir import wait_for_log
 from uavtest.runner.plan import plan_flight
@@ -54,7 +55,9 @@ class RunnerOptions(BaseModel):
     timeout: float | None = Field(None, gt=0, description="vehicle seconds; default: the spec's timeout")
     connect_timeout: float = Field(30.0, gt=0, description="wall seconds to wait for the first heartbeat")
     log_timeout: float = Field(15.0, gt=0, description="wall seconds to wait for the finished log")
-    step_ms: int = Field(50, ge=1, le=10_000, description="lockstep grant, vehicle milliseconds")
+    step_ms: int = Field(
+        DEFAULT_STEP_MS, ge=1, le=10_000, description="largest lockstep grant, vehicle milliseconds"
+    )
 
 
 class Interrupted(InfrastructureError):
@@ -118,11 +121,14 @@ def _fly(opts: RunnerOptions, spec: UavTestSpec) -> FlightReport:
         )
         if report.sim_time:
             per_step = f", {cpu / report.grants * 1e6:.0f} µs runner CPU per step" if report.grants else ""
+            flight = report.flight_wall[1] - report.flight_wall[0] if report.flight_wall else wall
             log.info(
-                "flew %.1f vehicle s in %.2f wall s (%.0fx real time), runner CPU %.2f s%s; %d grants",
+                "flew %.1f vehicle s in %.2f wall s (%.0fx real time; %.2f s with connect and setup), "
+                "runner CPU %.2f s%s; %d grants",
                 report.sim_time,
+                flight,
+                report.sim_time / flight if flight > 0 else 0.0,
                 wall,
-                report.sim_time / wall if wall else 0.0,
                 cpu,
                 per_step,
                 report.grants,
@@ -187,7 +193,7 @@ def run_replica_command(
     log_dir: Path | None = None,
     timeout: float | None = None,
     connect_timeout: float = 30.0,
-    step_ms: int = 50,
+    step_ms: int = DEFAULT_STEP_MS,
 ) -> int:
     """``uavtest runner``: fly one replica; print its ReplicaResult JSON as the last stdout line."""
     logging.basicConfig(

@@ -43,6 +43,7 @@ class FlightMonitor:
         self.geofence = geofence
         self.radius = radius
         self.min_distance = math.inf
+        self.last_distance = math.inf  # at the latest position (inf without obstacles)
         self.collision: LocalPosition | None = None  # the first position inside a box
         self.geofence_violation = 0.0
         self.max_altitude = -math.inf
@@ -78,6 +79,7 @@ class FlightMonitor:
             self.max_altitude = -p.z
         if self._boxes:
             d = self.distance(p.x, p.y, p.z)
+            self.last_distance = d
             if d < self.min_distance:
                 self.min_distance = d
             if d <= 0.0 and self.collision is None:

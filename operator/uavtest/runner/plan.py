@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 
 from uavtest.runner.core import CoreConfig
+from uavtest.runner.grants import DEFAULT_STEP_MS
 from uavtest.runner.mission import wire_items
 from uavtest.spec.commands import resolved_commands
 from uavtest.spec.mission import mission_items
@@ -31,7 +32,7 @@ def plan_flight(
     endpoint: str,
     timeout_s: float | None = None,
     connect_timeout_s: float = 30.0,
-    step_ms: int = 50,
+    step_ms: int = DEFAULT_STEP_MS,
     download_log: bool = False,
 ) -> CoreConfig:
     """The core's configuration for one flight of ``spec`` through ``endpoint``."""

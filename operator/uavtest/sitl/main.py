@@ -10,10 +10,17 @@ This is the I/O edge around the pure ``Vehicle``:
   announces ``NAMED_VALUE_INT(time_boot_ms=T, name="LOCKSTEP", value=T)`` once everything due
   at T is sent; a grant is ``NAMED_VALUE_INT(name="LOCKSTEP", value=T_until)``; messages that
   arrive before a grant are handled first, in order. While waiting, protocols are answered and
-  the announce (with a heartbeat) is repeated every ``REANNOUNCE_S`` of wall time.
+  the announce (with a heartbeat) is repeated every ``REANNOUNCE_S`` of wall time. Each step's
+  telemetry and its announce leave in one datagram per link (several only past
+  ``DATAGRAM_BYTES``); a link no client has spoken on (the GCS link under the engine) gets the
+  announce only with the wall-clock re-announce, not every step.
+- a lockstep simulator ends by itself, closing its log, when no client has sent anything for
+  ``--idle-exit`` wall seconds (default 60) after one was heard, or when its parent process
+  dies (checked on the re-announce timer): a client that vanished leaves no process behind.
 - free-running (default): the vehicle clock runs at ``speed_factor`` times the wall clock.
 - logs: ``<log_dir>/seed<S>-<n>.ulg`` (``.ulg.part`` while open); SIGTERM/SIGINT close the log
-  cleanly and end the process with exit code 0.
+  cleanly and end the process with exit code 0, at once: a wake-up pipe
+  (``signal.set_wakeup_fd``) ends the ``select`` wait as the signal arrives.
 """
 
 from __future__ import annotations
@@ -35,12 +42,13 @@ from uavtest.sitl.mavlink_io import Codec
 from uavtest.sitl.ulog_writer import ULogFile
 from uavtest.sitl.vehicle import STEP_US, SimConfig, Vehicle
 
-__all__ = ["LOCKSTEP_NAME", "FileLogSink", "run_sitl"]
+__all__ = ["IDLE_EXIT_S", "LOCKSTEP_NAME", "FileLogSink", "run_sitl"]
 
 log = logging.getLogger(__name__)
 
 LOCKSTEP_NAME = "LOCKSTEP"
 REANNOUNCE_S = 0.2
+IDLE_EXIT_S = 60.0  # lockstep: wall seconds without client traffic before the simulator ends
 DATAGRAM_BYTES = 1400
 _ALWAYS = frozenset({"HEARTBEAT", "STATUSTEXT", "NAMED_VALUE_INT"})
 
@@ -125,11 +133,60 @@ def _bind(host: str, port: int) -> socket.socket:
 
 
 class _Stop:
+    """SIGTERM/SIGINT: remember it; the wake-up pipe (``signal.set_wakeup_fd``) ends the wait at once."""
+
     def __init__(self) -> None:
         self.requested = False
 
     def __call__(self, signum: int, frame: FrameType | None) -> None:
         self.requested = True
+
+
+class _WakeupPipe:
+    """A self-pipe the C-level signal handler writes to, so ``select`` returns as a signal arrives.
+
+    Python retries ``select`` after running a signal handler (PEP 475), so without it a
+    SIGTERM would wait for the select timeout; with it the read end is readable at once.
+    """
+
+    def __init__(self) -> None:
+        self.rfd, self.wfd = os.pipe()
+        os.set_blocking(self.rfd, False)
+        os.set_blocking(self.wfd, False)
+        self._previous = signal.set_wakeup_fd(self.wfd, warn_on_full_buffer=False)
+
+    def drain(self) -> None:
+        with contextlib.suppress(BlockingIOError, InterruptedError):
+            while os.read(self.rfd, 512):
+                pass
+
+    def close(self) -> None:
+        signal.set_wakeup_fd(self._previous)
+        os.close(self.rfd)
+        os.close(self.wfd)
+
+
+@dataclass
+class _Watch:
+    """Why a lockstep simulator should end by itself: its clients went silent, or its parent died."""
+
+    idle_exit_s: float | None
+    parent: int = field(default_factory=os.getppid)
+    last_traffic: float | None = None  # wall time of the last datagram from any client
+
+    def heard(self, now: float) -> None:
+        self.last_traffic = now
+
+    def reason(self, now: float) -> str | None:
+        if os.getppid() != self.parent:
+            return f"parent process {self.parent} ended"
+        if (
+            self.idle_exit_s is not None
+            and self.last_traffic is not None
+            and now - self.last_traffic > self.idle_exit_s
+        ):
+            return f"no client traffic for {self.idle_exit_s:g} s"
+        return None
 
 
 def run_sitl(
@@ -144,11 +201,19 @@ def run_sitl(
     log_dir: Path = Path("log"),
     lockstep: bool = False,
     speed_factor: float = 1.0,
+    idle_exit_s: float | None = IDLE_EXIT_S,
     max_wall_s: float | None = None,
 ) -> int:
-    """Run the simulator until SIGTERM/SIGINT (or ``max_wall_s``); returns the exit code (0)."""
+    """Run the simulator until SIGTERM/SIGINT (or ``max_wall_s``); returns the exit code (0).
+
+    In lockstep a simulator also ends by itself (closing its log) when no client has sent
+    anything for ``idle_exit_s`` wall seconds after one was heard (None or 0: never), and
+    when its parent process dies (the engine that started it is gone).
+    """
     if speed_factor <= 0:
         raise BadInput("the speed factor must be > 0", field="--speed-factor", value=speed_factor)
+    if idle_exit_s is not None and idle_exit_s < 0:
+        raise BadInput("the idle exit time must be >= 0 s", field="--idle-exit", value=idle_exit_s)
     config = load_config(test, seed)
     sink = FileLogSink(log_dir, seed)
     vehicle = Vehicle(config, sink)
@@ -160,6 +225,8 @@ def run_sitl(
     by_fd = {link.sock.fileno(): link for link in links}
     stop = _Stop()
     previous = {s: signal.signal(s, stop) for s in (signal.SIGTERM, signal.SIGINT)}
+    wakeup = _WakeupPipe()
+    watch = _Watch(idle_exit_s or None) if lockstep else None
     log.info(
         "uavtest sitl: pid %d seed %d, API %s:%d -> %s:%d, GCS %d -> %d, %s",
         os.getpid(),
@@ -182,9 +249,14 @@ def run_sitl(
         for link in links:
             link.flush()
 
-    def announce() -> None:
+    def announce(*, everywhere: bool) -> None:
+        """The lockstep announce, last in the step's datagram; links nobody spoke on get it only
+        on the wall-clock re-announce (a client that binds their port later still finds it)."""
         t_ms = vehicle.time_us // 1000
-        broadcast([Msg("NAMED_VALUE_INT", {"time_boot_ms": t_ms, "name": LOCKSTEP_NAME, "value": t_ms})])
+        msg = Msg("NAMED_VALUE_INT", {"time_boot_ms": t_ms, "name": LOCKSTEP_NAME, "value": t_ms})
+        for link in links:
+            if everywhere or link.peer_seen or link.always_stream:
+                link.queue(msg)
 
     def handle(link: Link, data: bytes, addr: tuple[str, int]) -> bool:
         """Handle one datagram; True when it held a lockstep grant that advanced the clock."""
@@ -207,9 +279,11 @@ def run_sitl(
     sim0 = vehicle.time_us
     broadcast(vehicle.drain())
     if lockstep:
-        announce()
+        announce(everywhere=True)
     flush()
     last_announce = time.monotonic()
+    fds = [wakeup.rfd, *by_fd]
+    ended = ""
     try:
         while not stop.requested:
             now = time.monotonic()
@@ -223,9 +297,12 @@ def run_sitl(
                     broadcast(vehicle.advance(target))
                     flush()
                 timeout = max(0.0005, STEP_US * 5 / 1e6 / speed_factor)
-            ready, _, _ = select.select(list(by_fd), [], [], timeout)
+            ready, _, _ = select.select(fds, [], [], timeout)
             granted = False
             for fd in ready:
+                if fd == wakeup.rfd:
+                    wakeup.drain()
+                    continue
                 link = by_fd[fd]
                 while True:
                     try:
@@ -234,17 +311,32 @@ def run_sitl(
                         break
                     except OSError:  # ICMP port unreachable from an earlier send
                         continue
+                    if watch is not None:
+                        watch.heard(now)
                     granted |= handle(link, data, addr)
-            if lockstep and (granted or time.monotonic() - last_announce >= REANNOUNCE_S):
-                if not granted:
+            if stop.requested:
+                break
+            if lockstep:
+                now = time.monotonic()
+                if granted:
+                    announce(everywhere=False)
+                elif now - last_announce >= REANNOUNCE_S:
+                    assert watch is not None
+                    ended = watch.reason(now) or ""
+                    if ended:
+                        break
                     broadcast([vehicle.heartbeat()])
-                announce()
-                last_announce = time.monotonic()
+                    announce(everywhere=True)
+                if granted or now - last_announce >= REANNOUNCE_S:
+                    last_announce = now
             flush()
     finally:
+        if ended:
+            log.warning("uavtest sitl: %s; closing the log and exiting", ended)
         vehicle.recorder.stop()
         for link in links:
             link.sock.close()
+        wakeup.close()
         for s, handler in previous.items():
             signal.signal(s, handler)
     return 0

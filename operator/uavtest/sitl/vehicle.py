@@ -328,7 +328,7 @@ class Vehicle:
                     self._ground_since = None
                     self._status_dirty = True
                     self._text(MavSeverity.INFO, "Takeoff detected")
-            elif b.on_ground:
+            elif b.on_ground and self._descent_commanded():
                 if self._ground_since is None:
                     self._ground_since = t
                 on = (t - self._ground_since) / 1e6
@@ -387,6 +387,24 @@ class Vehicle:
             self._text(MavSeverity.CRITICAL, "Manual control lost")
             self._sticks_us = None
             self._failsafe(int(p["NAV_RCL_ACT"]), t)
+
+    def _descent_commanded(self) -> bool:
+        """PX4's land detector: under climb-rate control, ground contact needs a commanded descent.
+
+        While the takeoff ramp builds up thrust (or any climb is commanded) a vehicle still
+        resting on the ground is not landing: PX4 requires the velocity setpoint to point down
+        at >= 1.1 LNDMC_Z_VEL_MAX (itself capped at min(MPC_LAND_CRWL, MPC_LAND_SPEED) / 1.2)
+        until it is landed. Without climb-rate control (manual/stabilized) thrust alone decides,
+        and the body only rests on the ground at low thrust.
+        """
+        kind = self.goal.kind
+        if kind is GoalKind.TAKEOFF:
+            return False
+        if kind in (GoalKind.ATTITUDE, GoalKind.IDLE):
+            return True
+        p = self.params
+        z_vel_max = min(p["LNDMC_Z_VEL_MAX"], min(p["MPC_LAND_CRWL"], p["MPC_LAND_SPEED"]) / 1.2)
+        return self.ctrl.vz >= 1.1 * z_vel_max
 
     def _failsafe(self, action: int, t: int) -> None:
         """NAV_DLL_ACT / NAV_RCL_ACT: 1 hold, 2 return, 3 land, 5 terminate."""

@@ -1,0 +1,71 @@
+"""The land detector: no false landing while the takeoff ramp still holds the vehicle on the ground.
+
+PX4's multicopter land detector only lets ground contact count under climb-rate control when a
+descent is commanded, so a vehicle whose thrust is still ramping up for takeoff never "lands".
+"""
+
+from pathlib import Path
+
+import pytest
+
+from uavtest.sitl.inprocess import fly_mission
+from uavtest.sitl.mav import MavCmd, Msg
+from uavtest.sitl.modes import NavState
+
+from .conftest import competition
+from .test_vehicle import command, ready_vehicle
+
+
+def test_mission2_completes_for_every_seed(shared_data: Path):
+    """Seeds 25, 30, 41, ... used to see 'Landing detected' ~2 s after takeoff, still on the ground."""
+    failed = []
+    for seed in range(60):
+        config, items = competition(shared_data, 2, seed)
+        flight = fly_mission(config, items)
+        reached = [seq for seq, _ in flight.reached]
+        if reached != list(range(len(items))) or flight.flight_time is None or flight.flight_time < 30:
+            failed.append((seed, flight.flight_time, [text for _, text in flight.texts][:6]))
+    assert not failed, f"flights that did not complete: {failed}"
+
+
+@pytest.mark.parametrize("ramp_s", [3.0, 6.0, 10.0])
+def test_slow_takeoff_ramp_leaves_the_ground_instead_of_landing(ramp_s: float):
+    v = ready_vehicle(params={"MPC_TKO_RAMP_T": ramp_s})
+    command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
+    command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, float("nan"), float("nan"), float("nan"), 488.0 + 5)
+    v.fly_until(lambda v: not v.landed, 20_000_000)
+    assert not v.landed, "takeoff was never detected"
+    takeoff_us = v.takeoff_us
+    v.fly_until(lambda v: not v.body.on_ground or v.landed or not v.armed, 30_000_000)
+    assert v.armed and not v.landed, "landing detected while the takeoff ramp held the vehicle down"
+    assert v.takeoff_us == takeoff_us
+    v.fly_until(lambda v: -v.body.z > 4.0, 30_000_000)
+    assert -v.body.z > 4.0
+
+
+def test_landing_is_still_detected_after_a_land_command():
+    v = ready_vehicle(seed=25)
+    command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
+    command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, float("nan"), float("nan"), float("nan"), 488.0 + 3)
+    v.fly_until(lambda v: -v.body.z > 2.5, 30_000_000)
+    command(v, MavCmd.NAV_LAND)
+    assert v.nav_state == NavState.AUTO_LAND
+    v.fly_until(lambda v: not v.armed, 60_000_000)
+    assert v.landed and not v.armed
+    assert v.landed_at_us > v.takeoff_us > 0
+
+
+def test_position_mode_lands_with_throttle_down():
+    v = ready_vehicle(params={"COM_DISARM_LAND": 2.0})
+    command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
+    command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, float("nan"), float("nan"), float("nan"), 488.0 + 3)
+    v.fly_until(lambda v: -v.body.z > 2.5, 30_000_000)
+    command(v, MavCmd.DO_SET_MODE, 1, 3, 0)  # POSCTL
+    assert v.nav_state == NavState.POSCTL
+
+    def sticks_down(v) -> bool:
+        v.receive(Msg("MANUAL_CONTROL", {"x": 0, "y": 0, "z": 0, "r": 0, "target": 1}, 255, 190))
+        return v.landed
+
+    v.fly_until(sticks_down, 60_000_000)
+    assert v.landed
