@@ -29,7 +29,7 @@ wrapper() {
 }
 
 build_k8s() {
-  local key="$K8S_VERSION $(filesum "$HERE/go/k8s/go.mod" "$HERE/go/k8s/go.sum")"
+  local key; key="$K8S_VERSION $(filesum "$HERE/go/k8s/go.mod" "$HERE/go/k8s/go.sum")"
   local outs=("$BIN/kube-apiserver" "$BIN/kube-controller-manager" "$BIN/kube-scheduler" "$BIN/kubelet" "$BIN/kubectl")
   if stamp_ok k8s "$key" "${outs[@]}"; then SKIPPED=1; return 0; fi
   local src minor ld
@@ -43,7 +43,7 @@ build_k8s() {
 }
 
 build_etcd() {
-  local key="$ETCD_VERSION $(filesum "$HERE/go/etcd/go.mod" "$HERE/go/etcd/go.sum")"
+  local key; key="$ETCD_VERSION $(filesum "$HERE/go/etcd/go.mod" "$HERE/go/etcd/go.sum")"
   if stamp_ok etcd "$key" "$BIN/etcd"; then SKIPPED=1; return 0; fi
   local src; src=$(wrapper etcd)
   # go.etcd.io/etcd/server/v3 has replace directives, so `go install ...@version` is refused: wrapper module

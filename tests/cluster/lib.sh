@@ -1,4 +1,4 @@
-# shellcheck shell=bash
+# shellcheck shell=bash disable=SC2034
 # Shared settings of the e2e cluster scripts: sourced, never run.
 # Everything the harness builds or downloads lives under $UAVTEST_CACHE (default ~/.cache/uavtest).
 

@@ -66,11 +66,16 @@ def operator(
     op.stop()
 
 
-def hover(name: str, namespace: str, *, replicas: int, parallelism: int) -> dict[str, Any]:
+def hover(name: str, namespace: str, *, replicas: int, parallelism: int, hold: float = 10) -> dict[str, Any]:
+    """examples/hover.yaml, hovering HOLD seconds (long holds keep a replica in the air for a while)."""
     doc = yaml.safe_load((REPO_ROOT / "examples" / "hover.yaml").read_text())
     doc["metadata"] = {"name": name, "namespace": namespace}
-    doc["spec"]["replicas"] = replicas
-    doc["spec"]["parallelism"] = parallelism
+    spec = doc["spec"]
+    spec["replicas"] = replicas
+    spec["parallelism"] = parallelism
+    spec["mission"]["waypoints"][0]["hold"] = hold
+    spec["timeout"] = max(spec["timeout"], hold + 120)
+    spec["assertions"]["maxFlightTime"] = max(spec["assertions"]["maxFlightTime"], hold + 60)
     return doc
 
 
@@ -111,7 +116,7 @@ def test_a_deleted_replica_pod_is_retried_and_counted_once(
     cluster: Cluster, namespace: str, operator: Operator
 ) -> None:
     name = "deleted-pod"
-    cluster.apply(hover(name, namespace, replicas=2, parallelism=2))
+    cluster.apply(hover(name, namespace, replicas=2, parallelism=2, hold=300))  # still flying when deleted
     selector = f"uavtest.io/test={name},batch.kubernetes.io/job-completion-index=0"
     # kubectl wait needs the pod to exist first
     assert cluster.wait_until(

@@ -4,7 +4,8 @@ connect → set params → upload the mission → timed commands → monitor →
 analyse → store ``flight.ulg``, ``trajectory.csv``, ``result.json``.
 
 - ``uavtest.runner.core``: the pure stage machine (decoded messages and clocks in, messages out);
-  ``params``, ``mission``, ``commands``, ``monitor``, ``logdownload`` are its pure parts.
+  ``params``, ``mission``, ``commands``, ``monitor``, ``logdownload`` are its pure parts;
+  ``grants`` sizes the lockstep grants (large while nothing happens, short around events).
 - ``uavtest.runner.link``: the only pymavlink adapter (UDP ``udpin:HOST:PORT``).
 - ``uavtest.runner.main``: ``run_replica`` / ``run_replica_command`` (``uavtest runner``).
 """

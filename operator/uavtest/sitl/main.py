@@ -10,7 +10,9 @@ This is the I/O edge around the pure ``Vehicle``:
   announces ``NAMED_VALUE_INT(time_boot_ms=T, name="LOCKSTEP", value=T)`` once everything due
   at T is sent; a grant is ``NAMED_VALUE_INT(name="LOCKSTEP", value=T_until)``; messages that
   arrive before a grant are handled first, in order. While waiting, protocols are answered and
-  the announce (with a heartbeat) is repeated every ``REANNOUNCE_S`` of wall time. Each step's
+  the announce (with a heartbeat) is repeated every ``REANNOUNCE_S`` of wall time
+  (``SEARCH_REANNOUNCE_S`` until a client has spoken: a runner started at the same time finds
+  the simulator as soon as it has bound its port). Each step's
   telemetry and its announce leave in one datagram per link (several only past
   ``DATAGRAM_BYTES``); a link no client has spoken on (the GCS link under the engine) gets the
   announce only with the wall-clock re-announce, not every step.
@@ -48,6 +50,7 @@ log = logging.getLogger(__name__)
 
 LOCKSTEP_NAME = "LOCKSTEP"
 REANNOUNCE_S = 0.2
+SEARCH_REANNOUNCE_S = 0.02  # ... until a client has spoken (it may bind its port just after we start)
 IDLE_EXIT_S = 60.0  # lockstep: wall seconds without client traffic before the simulator ends
 DATAGRAM_BYTES = 1400
 _ALWAYS = frozenset({"HEARTBEAT", "STATUSTEXT", "NAMED_VALUE_INT"})
@@ -289,8 +292,10 @@ def run_sitl(
             now = time.monotonic()
             if max_wall_s is not None and now - wall0 > max_wall_s:
                 break
+            heard = watch is not None and watch.last_traffic is not None
+            period = REANNOUNCE_S if heard else SEARCH_REANNOUNCE_S
             if lockstep:
-                timeout = max(0.0, REANNOUNCE_S - (now - last_announce))
+                timeout = max(0.0, period - (now - last_announce))
             else:
                 target = sim0 + int((now - wall0) * speed_factor * 1e6)
                 if target >= vehicle.time_us + STEP_US:
@@ -312,7 +317,7 @@ def run_sitl(
                     except OSError:  # ICMP port unreachable from an earlier send
                         continue
                     if watch is not None:
-                        watch.heard(now)
+                        watch.heard(time.monotonic())
                     granted |= handle(link, data, addr)
             if stop.requested:
                 break
@@ -320,14 +325,14 @@ def run_sitl(
                 now = time.monotonic()
                 if granted:
                     announce(everywhere=False)
-                elif now - last_announce >= REANNOUNCE_S:
+                elif now - last_announce >= period:
                     assert watch is not None
                     ended = watch.reason(now) or ""
                     if ended:
                         break
                     broadcast([vehicle.heartbeat()])
                     announce(everywhere=True)
-                if granted or now - last_announce >= REANNOUNCE_S:
+                if granted or now - last_announce >= period:
                     last_announce = now
             flush()
     finally:
