@@ -19,7 +19,6 @@ from e2e.operator_support import (
     store_keys,
     store_secret,
     wait_complete,
-    wait_status,
 )
 from harness.cluster import REPO_ROOT, Cluster
 from harness.minio import MinioServer
@@ -83,8 +82,29 @@ def jobs_of(cluster: Cluster, namespace: str, name: str) -> list[dict[str, Any]]
     return cluster.kubectl_json("get", "jobs", "-n", namespace, "-l", f"uavtest.io/test={name}")["items"]
 
 
+def wait_pod_running(cluster: Cluster, namespace: str, selector: str, timeout: float = 300) -> None:
+    """Until a pod matching SELECTOR runs (kubectl wait needs the pod to exist first)."""
+    assert cluster.wait_until(
+        lambda: cluster.kubectl("get", "pods", "-n", namespace, "-l", selector, "-o", "name") != "", timeout
+    )
+    cluster.kubectl(
+        "wait",
+        "-n",
+        namespace,
+        "pod",
+        "-l",
+        selector,
+        "--for=jsonpath={.status.phase}=Running",
+        f"--timeout={int(timeout)}s",
+        timeout=timeout + 30,
+    )
+
+
 def wait_running(cluster: Cluster, namespace: str, name: str, timeout: float = 300) -> None:
-    wait_status(cluster, namespace, name, "{.status.running}", "1", timeout)
+    """Until the UavTest's first replica pod runs."""
+    wait_pod_running(
+        cluster, namespace, f"uavtest.io/test={name},batch.kubernetes.io/job-completion-index=0", timeout
+    )
 
 
 def test_operator_killed_mid_run_restarts_without_duplicate_jobs(
@@ -116,33 +136,22 @@ def test_a_deleted_replica_pod_is_retried_and_counted_once(
     cluster: Cluster, namespace: str, operator: Operator
 ) -> None:
     name = "deleted-pod"
-    cluster.apply(hover(name, namespace, replicas=2, parallelism=2, hold=300))  # still flying when deleted
+    # a 20-minute hover (some seconds of wall time in lockstep): the deletion hits a replica in flight
+    cluster.apply(hover(name, namespace, replicas=2, parallelism=2, hold=1200))
     selector = f"uavtest.io/test={name},batch.kubernetes.io/job-completion-index=0"
-    # kubectl wait needs the pod to exist first
-    assert cluster.wait_until(
-        lambda: cluster.kubectl("get", "pods", "-n", namespace, "-l", selector, "-o", "name") != "", 300
-    )
-    cluster.kubectl(
-        "wait",
-        "-n",
-        namespace,
-        "pod",
-        "-l",
-        selector,
-        "--for=jsonpath={.status.phase}=Running",
-        "--timeout=300s",
-        timeout=330,
-    )
+    wait_pod_running(cluster, namespace, selector)
     deleted = cluster.kubectl("get", "pods", "-n", namespace, "-l", selector, "-o", "name").split()
     assert len(deleted) == 1
-    cluster.kubectl("delete", "-n", namespace, deleted[0], "--wait=false")
+    # killed within a second (as a node loss would): the runner is PID 1 and outlives a plain SIGTERM
+    cluster.kubectl("delete", "-n", namespace, deleted[0], "--grace-period=1", "--wait=false")
     status = wait_complete(cluster, namespace, name)
     assert (status["replicas"], status["passed"], status["failed"], status["errors"]) == (2, 2, 0, 0), status
     assert sorted(r["index"] for r in status["results"]) == [0, 1]
     # replica 0 flew again in a new pod, with the same index and seed
     again = cluster.kubectl_json("get", "pods", "-n", namespace, "-l", selector)["items"]
-    assert [f"pod/{p['metadata']['name']}" for p in again] != deleted
-    assert [p["status"]["phase"] for p in again] == ["Succeeded"]
+    everything = cluster.kubectl("get", "pods,jobs,events", "-n", namespace, "-o", "wide")
+    assert [f"pod/{p['metadata']['name']}" for p in again] != deleted, everything
+    assert [p["status"]["phase"] for p in again] == ["Succeeded"], (deleted, everything)
     job = jobs_of(cluster, namespace, name)[0]
     assert job["status"]["completedIndexes"] == "0,1"
 
@@ -162,6 +171,11 @@ def test_minio_unreachable_for_30s_while_replicas_upload_loses_nothing(
     finally:
         resume.join()
     assert (status["passed"], status["errors"]) == (3, 0), status
+    # the outage really hit the uploads: the runners logged their retries
+    logs = cluster.kubectl(
+        "logs", "-n", namespace, "-l", f"uavtest.io/test={name}", "-c", "runner", "--tail=-1"
+    )
+    assert "retry" in logs, logs[-3000:]
     run = status["runId"]
     keys = store_keys(minio, bucket, f"{namespace}/{name}/{run}/")
     for i in range(3):

@@ -19,6 +19,8 @@ import yaml
 
 from uavtest.analysis.models import ReplicaResult, Verdict
 from uavtest.analysis.trajectory import Trajectory
+from uavtest.engine.px4home import px4_home_env, sih_latlon_is_int
+from uavtest.spec.models import Home
 
 pytestmark = [pytest.mark.integration, pytest.mark.px4, pytest.mark.slow]
 
@@ -41,6 +43,8 @@ def px4(tmp_path: Path) -> subprocess.Popen[bytes]:
         "PX4_SIMULATOR": "sihsim",
         "PX4_SIM_SPEED_FACTOR": os.environ.get("UAVTEST_PX4_SPEED", "10"),
         "HEADLESS": "1",
+        # start where the test's mission is (the default world.home), not at PX4's default place
+        **px4_home_env(Home(), int_latlon=sih_latlon_is_int(exe)),
     }
     log = open(tmp_path / "px4.log", "wb")  # noqa: SIM115
     proc = subprocess.Popen(

@@ -300,6 +300,7 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
             out_dir=store.root / replica_prefix(NAMESPACE, name, run_id, i),
             simulator=spec.vehicle.simulator,
             px4_bin=px4_bin,
+            home=spec.world.home,
             wall_timeout=wall_timeout,
             retries=options.retries,
         )

@@ -31,7 +31,8 @@ from uavtest.analysis.models import ReplicaResult, Verdict
 from uavtest.engine.launch import ExecLauncher, Launcher, Started
 from uavtest.engine.ports import PortAllocator, ReplicaPorts
 from uavtest.errors import UavTestError
-from uavtest.spec.models import Simulator
+from uavtest.engine.px4home import px4_home_env, sih_latlon_is_int
+from uavtest.spec.models import Home, Simulator
 from uavtest.store import ArtifactStore
 from uavtest.store.layout import replica_key
 
@@ -72,6 +73,7 @@ class ReplicaJob(BaseModel):
     out_dir: Path = Field(description="this replica's folder for the processes' stderr")
     simulator: Simulator = Simulator.BUILTIN
     px4_bin: Path | None = None
+    home: Home = Field(default_factory=Home, description="where PX4 SITL starts (world.home)")
     wall_timeout: float = Field(gt=0, description="wall seconds one attempt may take before it is killed")
     retries: int = Field(DEFAULT_RETRIES, ge=0)
     sim_death_grace: float = Field(
@@ -130,6 +132,7 @@ def plan_processes(job: ReplicaJob, ports: ReplicaPorts, log_dir: Path) -> Proce
             raise ValueError("a PX4 replica needs px4_bin and a PX4 instance number")
         env = dict(os.environ)
         env.setdefault("PX4_SIM_MODEL", "sihsim_quadx")
+        env.update(px4_home_env(job.home, int_latlon=sih_latlon_is_int(job.px4_bin)))
         sim = [str(job.px4_bin), "-i", str(ports.instance), "-d", str(px4_etc_dir(job.px4_bin))]
         # PX4 writes its logs under <working dir>/log/<date>/; the runner collects them there.
         runner[runner.index("--log-dir") + 1] = str(log_dir / "log")
