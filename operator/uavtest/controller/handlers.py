@@ -4,7 +4,10 @@
 - indexes of UavTests, their Jobs and their pods (keyed by namespace and test name), so every
   handler sees its siblings without an API call and a restart rebuilds them from one list;
 - on create of a UavTest: its ConfigMap and Indexed Job, unless they exist (idempotent);
-- on every event of a replica Job or pod: the parent's status (patched only when it changed);
+- on every event of a replica Job: the parent's status from the Job and the pods index (patched
+  only when it changed). The Job's own status changes with every pod that starts, becomes ready,
+  ends or is retried, so pod events need no handler of their own: they only update the index,
+  which keeps a few hundred bytes per pod instead of queueing whole pod bodies for a handler;
 - a timer that runs only while a test awaits aggregation (every index finished): aggregate,
   or, while the store is unreachable, come back after ``AGGREGATE_RETRY_SECONDS``.
 """
@@ -154,27 +157,6 @@ def job_changed(
         jobs_by_test,
         pods_by_test,
         job_deleted=type == "DELETED",
-    )
-
-
-@kopf.on.event("v1", "pods", labels=_OURS)
-def pod_changed(
-    namespace: str,
-    labels: kopf.Labels,
-    memo: kopf.Memo,
-    tests_by_name: kopf.Index,
-    jobs_by_test: kopf.Index,
-    pods_by_test: kopf.Index,
-    **_: Any,
-) -> None:
-    _sync(
-        memo,
-        namespace,
-        labels[names.LABEL_TEST],
-        labels[names.LABEL_RUN],
-        tests_by_name,
-        jobs_by_test,
-        pods_by_test,
     )
 
 

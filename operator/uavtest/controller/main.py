@@ -14,7 +14,7 @@ __all__ = ["run_operator"]
 
 # kopf reports every handler call at INFO; for the per-event handlers that is one line per pod
 # event. Without --verbose those lines are dropped (failures are still logged at ERROR).
-_ROUTINE = re.compile(r"^Handler '(pod_changed|job_changed|forget_deleted)' succeeded")
+_ROUTINE = re.compile(r"^Handler '(job_changed|forget_deleted)' succeeded")
 
 
 class _QuietRoutine(logging.Filter):

@@ -30,8 +30,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from uavtest.analysis.models import ReplicaResult, Verdict
 from uavtest.engine.launch import ExecLauncher, Launcher, Started
 from uavtest.engine.ports import PortAllocator, ReplicaPorts
-from uavtest.errors import UavTestError
 from uavtest.engine.px4home import px4_home_env, sih_latlon_is_int
+from uavtest.errors import UavTestError
 from uavtest.spec.models import Home, Simulator
 from uavtest.store import ArtifactStore
 from uavtest.store.layout import replica_key
