@@ -1,6 +1,6 @@
 #!/bin/bash
 # build.sh [STEP...] : build (once) everything the e2e cluster needs, into $UAVTEST_CACHE (~/.cache/uavtest).
-#   steps: k8s etcd kwok minio pause debs   (default: all of them, in that order)
+#   steps: k8s etcd kwok minio helm pause debs   (default: all of them, in that order)
 # Each step is skipped when its outputs exist and its version stamp matches; each prints its duration.
 # From nothing it needs only Go (>= 1.26), apt-get/dpkg-deb, and the Go module proxy + Debian mirror.
 set -euo pipefail
@@ -8,7 +8,7 @@ set -euo pipefail
 
 mkdir -p "$BIN" "$SHARE" "$CACHE/src" "$CACHE/deb"
 exec 9>"$CACHE/.build.lock"; flock 9   # concurrent test sessions share the cache: one build at a time
-STEPS=("$@"); [ ${#STEPS[@]} -gt 0 ] || STEPS=(k8s etcd kwok minio pause debs)
+STEPS=("$@"); [ ${#STEPS[@]} -gt 0 ] || STEPS=(k8s etcd kwok minio helm pause debs)
 
 # stamp_ok NAME KEY FILE... : true when every FILE exists and the stamp of NAME reads KEY
 stamp_ok() {
@@ -69,6 +69,12 @@ build_minio() {
   if stamp_ok minio "$MINIO_VERSION" "$BIN/minio"; then SKIPPED=1; return 0; fi
   GOBIN=$BIN go install -trimpath -ldflags='-s -w' "github.com/minio/minio@$MINIO_VERSION"
   stamp_set minio "$MINIO_VERSION"
+}
+
+build_helm() {
+  if stamp_ok helm "$HELM_VERSION" "$BIN/helm"; then SKIPPED=1; return 0; fi
+  GOBIN=$BIN go install -trimpath -ldflags='-s -w' "helm.sh/helm/v3/cmd/helm@$HELM_VERSION"
+  stamp_set helm "$HELM_VERSION"
 }
 
 build_pause() {

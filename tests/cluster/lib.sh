@@ -14,6 +14,7 @@ ETCD_VERSION=v3.6.16
 KWOK_VERSION=v0.8.0
 # github.com/minio/minio has no semver tags: a pseudo-version of master (2026-02-12), builds with Go 1.26
 MINIO_VERSION=v0.0.0-20260212201848-7aac2a2c5b7c
+HELM_VERSION=v3.16.4   # renders charts/uavtest in the chart tests
 DEB_PACKAGES="containerd runc containernetworking-plugins"
 REAL_NODE_OWNER=/run/uavtest-real-node   # "DIR PID" of the cluster that has the host's one real node
 PAUSE_IMAGE=uavtest.local/pause:1   # the pod sandbox image, built from go/pause
