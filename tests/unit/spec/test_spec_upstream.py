@@ -85,7 +85,8 @@ def test_aerialist_samples_load(shared_data: Path, name: str, replicas: int) -> 
     assert spec.world.home.lat == pytest.approx(47.49636519617687)  # the real flight's site
     similarity = spec.assertions.similarity
     assert similarity is not None and similarity.log_file is not None
-    assert Path(similarity.log_file) == shared_data / "aerialist" / "samples" / "flights" / "mission1.ulg"
+    expected = shared_data / "aerialist" / "samples" / "flights" / "mission1.ulg"
+    assert Path(similarity.log_file).resolve() == expected.resolve()
     assert similarity.metric.value == "dtw"
 
 
