@@ -229,6 +229,8 @@ def _fly_all(
             for f in futures:
                 f.cancel()
             raise
+    if not console.is_terminal:
+        console.line()  # a live display ends its last frame without a newline when not on a terminal
 
 
 def _launcher(settings: EngineSettings, px4_bin: Path | None, replicas: int) -> Launcher:
