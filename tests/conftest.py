@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import os
+import sys
 from pathlib import Path
 
 import pytest
 
 REPO = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(REPO / "tests"))  # shared test helpers: `import harness`
 SHARED_DATA = Path(os.environ.get("UAVTEST_SHARED_DATA", REPO.parent / "shared" / "data"))
 
 

@@ -2,40 +2,13 @@
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import pytest
 
+from harness.engine_cli import uavtest_run
+
 pytestmark = pytest.mark.integration
-
-
-@dataclass
-class RunOutput:
-    code: int
-    summary: dict[str, Any] | None
-    stdout: str
-    stderr: str
-
-    @property
-    def by_index(self) -> dict[int, dict[str, Any]]:
-        assert self.summary is not None, self.stderr[-3000:]
-        return {r["index"]: r for r in self.summary["results"]}
-
-
-def uavtest_run(test: Path, out: Path, *args: str, json_out: bool = True, timeout: float = 900) -> RunOutput:
-    cmd = [sys.executable, "-m", "uavtest.cli", "run", str(test), "--out", str(out), *args]
-    if json_out:
-        cmd.append("--json")
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
-    summary = None
-    if json_out and proc.stdout.strip().startswith("{"):
-        summary = json.loads(proc.stdout)
-    return RunOutput(proc.returncode, summary, proc.stdout, proc.stderr)
 
 
 def test_hover_passes(repo_root: Path, tmp_path: Path) -> None:
