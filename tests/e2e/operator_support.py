@@ -11,12 +11,14 @@ import contextlib
 import ipaddress
 import json
 import os
+import secrets
 import signal
 import socket
 import subprocess
 import sys
 import threading
 import urllib.request
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -284,3 +286,41 @@ def wait_complete(cluster: Cluster, namespace: str, name: str, timeout: float = 
 
 def store_keys(minio: MinioServer, bucket: str, prefix: str) -> list[str]:
     return sorted(o.object_name for o in minio.client().list_objects(bucket, prefix=prefix, recursive=True))
+
+
+def fresh_bucket(minio: MinioServer, prefix: str) -> str:
+    """A new, empty bucket for one test module."""
+    name = f"{prefix}-{secrets.token_hex(3)}"
+    minio.client().make_bucket(name)
+    return name
+
+
+@contextlib.contextmanager
+def running_operator(
+    cluster: Cluster, namespace: str, minio: MinioServer, runner_image: str, bucket: str, tmp: Path
+) -> Iterator[Operator]:
+    """`uavtest operator` under the chart's least-privilege RBAC, storing to ``bucket``.
+
+    On exit the module's UavTests are deleted while the operator still runs (it removes its
+    finalizer from them), then the operator stops.
+    """
+    install_crd(cluster)
+    store_secret(cluster, namespace, minio)
+    op = Operator(
+        cluster,
+        namespace,
+        minio,
+        bucket=bucket,
+        pod_endpoint=pod_reachable(cluster, namespace, runner_image, minio.endpoint),
+        kubeconfig=least_privilege_kubeconfig(cluster, namespace, tmp / "kubeconfig"),
+        log=tmp / "operator.log",
+        runner_image=runner_image,
+    )
+    op.start()
+    try:
+        yield op
+    finally:
+        cluster.kubectl(
+            "delete", "uavtests", "--all", "-n", namespace, "--timeout=120s", check=False, timeout=150
+        )
+        op.stop()

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import secrets
 import signal
 import threading
 from collections.abc import Iterator
@@ -13,11 +12,9 @@ import yaml
 
 from e2e.operator_support import (
     Operator,
-    install_crd,
-    least_privilege_kubeconfig,
-    pod_reachable,
+    fresh_bucket,
+    running_operator,
     store_keys,
-    store_secret,
     wait_complete,
 )
 from harness.cluster import REPO_ROOT, Cluster
@@ -30,9 +27,7 @@ MINIO_OUTAGE_SECONDS = 30.0
 
 @pytest.fixture(scope="module")
 def bucket(minio: MinioServer) -> str:
-    name = f"uavtest-faults-{secrets.token_hex(3)}"
-    minio.client().make_bucket(name)
-    return name
+    return fresh_bucket(minio, "uavtest-faults")
 
 
 @pytest.fixture(scope="module")
@@ -44,25 +39,9 @@ def operator(
     bucket: str,
     tmp_path_factory: pytest.TempPathFactory,
 ) -> Iterator[Operator]:
-    install_crd(cluster)
-    store_secret(cluster, namespace, minio)
     tmp = tmp_path_factory.mktemp("operator-faults")
-    op = Operator(
-        cluster,
-        namespace,
-        minio,
-        bucket=bucket,
-        pod_endpoint=pod_reachable(cluster, namespace, runner_image, minio.endpoint),
-        kubeconfig=least_privilege_kubeconfig(cluster, namespace, tmp / "kubeconfig"),
-        log=tmp / "operator.log",
-        runner_image=runner_image,
-    )
-    op.start()
-    yield op
-    cluster.kubectl(
-        "delete", "uavtests", "--all", "-n", namespace, "--timeout=120s", check=False, timeout=150
-    )
-    op.stop()
+    with running_operator(cluster, namespace, minio, runner_image, bucket, tmp) as op:
+        yield op
 
 
 def hover(name: str, namespace: str, *, replicas: int, parallelism: int, hold: float = 10) -> dict[str, Any]:
