@@ -8,6 +8,9 @@ from __future__ import annotations
 
 from enum import IntEnum
 
+from uavtest.mavlink_numbers import LandedState, MissionResult, ParamType
+from uavtest.mavlink_numbers import MavCmd as Cmd
+from uavtest.mavlink_numbers import MavResult as AckResult
 from uavtest.spec.models import FlightMode
 
 __all__ = [
@@ -29,75 +32,6 @@ __all__ = [
 
 MODE_FLAG_CUSTOM_MODE_ENABLED = 1
 FORCE_DISARM_MAGIC = 21196.0  # ARM_DISARM param2: disarm even in the air
-
-
-class Cmd(IntEnum):
-    """MAV_CMD numbers the runner sends."""
-
-    NAV_WAYPOINT = 16
-    NAV_LOITER_TIME = 19
-    NAV_RETURN_TO_LAUNCH = 20
-    NAV_LAND = 21
-    NAV_TAKEOFF = 22
-    DO_SET_MODE = 176
-    DO_CHANGE_SPEED = 178
-    COMPONENT_ARM_DISARM = 400
-
-
-class AckResult(IntEnum):
-    """MAV_RESULT."""
-
-    ACCEPTED = 0
-    TEMPORARILY_REJECTED = 1
-    DENIED = 2
-    UNSUPPORTED = 3
-    FAILED = 4
-    IN_PROGRESS = 5
-    CANCELLED = 6
-
-
-class MissionResult(IntEnum):
-    """MAV_MISSION_RESULT."""
-
-    ACCEPTED = 0
-    ERROR = 1
-    UNSUPPORTED_FRAME = 2
-    UNSUPPORTED = 3
-    NO_SPACE = 4
-    INVALID = 5
-    INVALID_PARAM1 = 6
-    INVALID_PARAM2 = 7
-    INVALID_PARAM3 = 8
-    INVALID_PARAM4 = 9
-    INVALID_PARAM5_X = 10
-    INVALID_PARAM6_Y = 11
-    INVALID_PARAM7 = 12
-    INVALID_SEQUENCE = 13
-    DENIED = 14
-    OPERATION_CANCELLED = 15
-
-
-class ParamType(IntEnum):
-    """MAV_PARAM_TYPE."""
-
-    UINT8 = 1
-    INT8 = 2
-    UINT16 = 3
-    INT16 = 4
-    UINT32 = 5
-    INT32 = 6
-    UINT64 = 7
-    INT64 = 8
-    REAL32 = 9
-    REAL64 = 10
-
-
-class LandedState(IntEnum):
-    UNDEFINED = 0
-    ON_GROUND = 1
-    IN_AIR = 2
-    TAKEOFF = 3
-    LANDING = 4
 
 
 class Autopilot(IntEnum):

@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import Any
 
+from uavtest.mavlink_numbers import LandedState, MavCmd, MavResult, MissionResult, ParamType
+
 __all__ = [
     "SYS_STATUS_SENSORS",
     "LandedState",
@@ -47,47 +49,6 @@ class Msg:
         return self.fields.get(key, default)
 
 
-class MavResult(IntEnum):
-    ACCEPTED = 0
-    TEMPORARILY_REJECTED = 1
-    DENIED = 2
-    UNSUPPORTED = 3
-    FAILED = 4
-    IN_PROGRESS = 5
-
-
-class MavCmd(IntEnum):
-    NAV_WAYPOINT = 16
-    NAV_LOITER_UNLIM = 17
-    NAV_LOITER_TIME = 19
-    NAV_RETURN_TO_LAUNCH = 20
-    NAV_LAND = 21
-    NAV_TAKEOFF = 22
-    DO_SET_MODE = 176
-    DO_CHANGE_SPEED = 178
-    DO_SET_HOME = 179
-    COMPONENT_ARM_DISARM = 400
-    MISSION_START = 300
-    SET_MESSAGE_INTERVAL = 511
-    REQUEST_MESSAGE = 512
-    REQUEST_AUTOPILOT_CAPABILITIES = 520
-    SET_CAMERA_MODE = 530
-
-
-class MissionResult(IntEnum):
-    """MAV_MISSION_RESULT."""
-
-    ACCEPTED = 0
-    ERROR = 1
-    UNSUPPORTED_FRAME = 2
-    UNSUPPORTED = 3
-    NO_SPACE = 4
-    INVALID = 5
-    INVALID_SEQUENCE = 13
-    DENIED = 14
-    OPERATION_CANCELLED = 15
-
-
 class MissionType(IntEnum):
     MISSION = 0
     FENCE = 1
@@ -102,21 +63,6 @@ class MavFrame(IntEnum):
     GLOBAL_RELATIVE_ALT = 3
     GLOBAL_INT = 5
     GLOBAL_RELATIVE_ALT_INT = 6
-
-
-class ParamType(IntEnum):
-    """MAV_PARAM_TYPE (the two PX4 uses)."""
-
-    INT32 = 6
-    REAL32 = 9
-
-
-class LandedState(IntEnum):
-    UNDEFINED = 0
-    ON_GROUND = 1
-    IN_AIR = 2
-    TAKEOFF = 3
-    LANDING = 4
 
 
 class MavState(IntEnum):

@@ -1,0 +1,90 @@
+"""MAVLink ``common.xml`` numbers both ends of the wire use: the simulator and the runner.
+
+Plain ``IntEnum``s, no pymavlink (each end keeps pymavlink behind its own adapter module);
+``tests/unit/sitl/test_modes.py`` checks them against pymavlink's dialect.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+__all__ = ["LandedState", "MavCmd", "MavResult", "MissionResult", "ParamType"]
+
+
+class MavCmd(IntEnum):
+    """MAV_CMD."""
+
+    NAV_WAYPOINT = 16
+    NAV_LOITER_UNLIM = 17
+    NAV_LOITER_TIME = 19
+    NAV_RETURN_TO_LAUNCH = 20
+    NAV_LAND = 21
+    NAV_TAKEOFF = 22
+    DO_SET_MODE = 176
+    DO_CHANGE_SPEED = 178
+    DO_SET_HOME = 179
+    MISSION_START = 300
+    COMPONENT_ARM_DISARM = 400
+    SET_MESSAGE_INTERVAL = 511
+    REQUEST_MESSAGE = 512
+    REQUEST_AUTOPILOT_CAPABILITIES = 520
+    SET_CAMERA_MODE = 530
+
+
+class MavResult(IntEnum):
+    """MAV_RESULT (COMMAND_ACK.result)."""
+
+    ACCEPTED = 0
+    TEMPORARILY_REJECTED = 1
+    DENIED = 2
+    UNSUPPORTED = 3
+    FAILED = 4
+    IN_PROGRESS = 5
+    COMMAND_LONG_ONLY = 7
+    COMMAND_INT_ONLY = 8
+
+
+class MissionResult(IntEnum):
+    """MAV_MISSION_RESULT (MISSION_ACK.type)."""
+
+    ACCEPTED = 0
+    ERROR = 1
+    UNSUPPORTED_FRAME = 2
+    UNSUPPORTED = 3
+    NO_SPACE = 4
+    INVALID = 5
+    INVALID_PARAM1 = 6
+    INVALID_PARAM2 = 7
+    INVALID_PARAM3 = 8
+    INVALID_PARAM4 = 9
+    INVALID_PARAM5_X = 10
+    INVALID_PARAM6_Y = 11
+    INVALID_PARAM7 = 12
+    INVALID_SEQUENCE = 13
+    DENIED = 14
+    OPERATION_CANCELLED = 15
+
+
+class ParamType(IntEnum):
+    """MAV_PARAM_TYPE (PX4 uses INT32 and REAL32)."""
+
+    UINT8 = 1
+    INT8 = 2
+    UINT16 = 3
+    INT16 = 4
+    UINT32 = 5
+    INT32 = 6
+    UINT64 = 7
+    INT64 = 8
+    REAL32 = 9
+    REAL64 = 10
+
+
+class LandedState(IntEnum):
+    """MAV_LANDED_STATE (EXTENDED_SYS_STATE.landed_state)."""
+
+    UNDEFINED = 0
+    ON_GROUND = 1
+    IN_AIR = 2
+    TAKEOFF = 3
+    LANDING = 4
