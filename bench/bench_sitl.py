@@ -24,6 +24,7 @@ import sys
 import time
 from pathlib import Path
 
+from uavtest.engine.replica import sitl_command
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.mav import Msg
 from uavtest.sitl.mavlink_io import Codec
@@ -106,25 +107,7 @@ def over_udp(test: Path, seed: int, step_ms: int = 50) -> tuple[float, float, fl
     children0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     client = LockstepClient(port)
     proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "uavtest.cli",
-            "sitl",
-            "--test",
-            str(test),
-            "--seed",
-            str(seed),
-            "--lockstep",
-            "--api-port",
-            str(port),
-            "--api-local-port",
-            "0",
-            "--gcs-local-port",
-            "0",
-            "--log-dir",
-            "/tmp/uavtest-bench-log",
-        ],
+        sitl_command(sys.executable, test, seed, api_port=port, log_dir=Path("/tmp/uavtest-bench-log")),
         stderr=subprocess.DEVNULL,
     )
     try:

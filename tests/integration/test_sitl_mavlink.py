@@ -17,6 +17,7 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import common as mavlink2
 from pyulog import ULog
 
+from uavtest.engine.replica import sitl_command
 from uavtest.sitl.params import decode_param_value, encode_param_value
 from uavtest.spec.loaders import load_test
 from uavtest.spec.mission import mission_items
@@ -84,27 +85,7 @@ def sitl(tmp_path: Path, shared_data: Path) -> Iterator[tuple[LockstepClient, su
     test = shared_data / "competition" / "snippets" / "case_studies" / "mission2.yaml"
     client = LockstepClient(port)
     proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "uavtest.cli",
-            "sitl",
-            "--test",
-            str(test),
-            "--seed",
-            "5",
-            "--lockstep",
-            "--api-port",
-            str(port),
-            "--api-local-port",
-            "0",
-            "--gcs-port",
-            str(free_udp_port()),
-            "--gcs-local-port",
-            "0",
-            "--log-dir",
-            str(log_dir),
-        ],
+        sitl_command(sys.executable, test, 5, api_port=port, gcs_port=free_udp_port(), log_dir=log_dir),
         env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
     try:
@@ -223,27 +204,7 @@ def _fly_over_udp(shared_data: Path, tmp_path: Path, seed: int) -> tuple[list, b
     log_dir = tmp_path / f"log{seed}-{port}"
     test = shared_data / "competition" / "snippets" / "case_studies" / "mission1.yaml"
     client = LockstepClient(port)
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "uavtest.cli",
-            "sitl",
-            "--test",
-            str(test),
-            "--seed",
-            str(seed),
-            "--lockstep",
-            "--api-port",
-            str(port),
-            "--api-local-port",
-            "0",
-            "--gcs-local-port",
-            "0",
-            "--log-dir",
-            str(log_dir),
-        ]
-    )
+    proc = subprocess.Popen(sitl_command(sys.executable, test, seed, api_port=port, log_dir=log_dir))
     try:
         spec = load_test(test).spec
         cmds = {"takeoff": 22, "waypoint": 16, "land": 21}

@@ -234,37 +234,17 @@ def _final_status(
     gen = test.generation
     line = summary_line(summary)
     ok = phase == Phase.SUCCEEDED
+    flaky_note = f"flakiness {summary.flakiness:.2f}" if summary.flakiness is not None else "no valid replica"
+    flaky_reason = ConditionReason.FLAKY if summary.flaky else ConditionReason.STABLE
+    true, false = ConditionStatus.TRUE, ConditionStatus.FALSE
     conds = list(previous.conditions)
-    conds = set_condition(
-        conds, ConditionType.COMPLETE, ConditionStatus.TRUE, Reason.AGGREGATED, line, generation=gen, now=now
-    )
-    conds = set_condition(
-        conds,
-        ConditionType.SUCCEEDED,
-        ConditionStatus.TRUE if ok else ConditionStatus.FALSE,
-        reason,
-        line,
-        generation=gen,
-        now=now,
-    )
-    conds = set_condition(
-        conds,
-        ConditionType.FAILED,
-        ConditionStatus.FALSE if ok else ConditionStatus.TRUE,
-        reason,
-        line,
-        generation=gen,
-        now=now,
-    )
-    conds = set_condition(
-        conds,
-        ConditionType.FLAKY,
-        ConditionStatus.TRUE if summary.flaky else ConditionStatus.FALSE,
-        ConditionReason.FLAKY if summary.flaky else ConditionReason.STABLE,
-        f"flakiness {summary.flakiness:.2f}" if summary.flakiness is not None else "no valid replica",
-        generation=gen,
-        now=now,
-    )
+    for ctype, cstatus, creason, message in (
+        (ConditionType.COMPLETE, true, Reason.AGGREGATED, line),
+        (ConditionType.SUCCEEDED, true if ok else false, reason, line),
+        (ConditionType.FAILED, false if ok else true, reason, line),
+        (ConditionType.FLAKY, true if summary.flaky else false, flaky_reason, flaky_note),
+    ):
+        conds = set_condition(conds, ctype, cstatus, creason, message, generation=gen, now=now)
     why = {r.index: r.reason for r in progress.replicas if r.reason}
     entries = []
     for r in summary.results:

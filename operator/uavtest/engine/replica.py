@@ -46,6 +46,7 @@ __all__ = [
     "plan_processes",
     "px4_etc_dir",
     "run_replica",
+    "sitl_command",
 ]
 
 log = logging.getLogger(__name__)
@@ -100,6 +101,21 @@ def px4_etc_dir(px4_bin: Path) -> Path:
     return px4_bin.resolve().parent.parent / "etc"
 
 
+def sitl_command(
+    python: str, test: Path | str, seed: int, *, api_port: int, log_dir: Path, gcs_port: int | None = None
+) -> list[str]:
+    """The ``uavtest sitl`` command line of one lockstep replica on loopback (process contract 4).
+
+    The simulator sends from any free local port; ``gcs_port`` None keeps PX4's 14550.
+    """
+    argv = [python, "-m", "uavtest.cli", "sitl", "--test", str(test), "--seed", str(seed)]
+    argv += ["--host", "127.0.0.1", "--api-port", str(api_port)]
+    if gcs_port is not None:
+        argv += ["--gcs-port", str(gcs_port)]
+    argv += ["--api-local-port", "0", "--gcs-local-port", "0", "--log-dir", str(log_dir), "--lockstep"]
+    return argv
+
+
 def plan_processes(job: ReplicaJob, ports: ReplicaPorts, log_dir: Path) -> ProcessPlan:
     """The simulator and runner command lines for one attempt (process contract 4)."""
     test = str(job.test_path)
@@ -137,29 +153,7 @@ def plan_processes(job: ReplicaJob, ports: ReplicaPorts, log_dir: Path) -> Proce
         # PX4 writes its logs under <working dir>/log/<date>/; the runner collects them there.
         runner[runner.index("--log-dir") + 1] = str(log_dir / "log")
         return ProcessPlan(sim=sim, runner=runner, sim_cwd=log_dir, sim_env=env)
-    sim = [
-        job.python,
-        "-m",
-        "uavtest.cli",
-        "sitl",
-        "--test",
-        test,
-        "--seed",
-        str(job.seed),
-        "--host",
-        "127.0.0.1",
-        "--api-port",
-        str(ports.api),
-        "--gcs-port",
-        str(ports.gcs),
-        "--api-local-port",
-        "0",
-        "--gcs-local-port",
-        "0",
-        "--log-dir",
-        str(log_dir),
-        "--lockstep",
-    ]
+    sim = sitl_command(job.python, test, job.seed, api_port=ports.api, gcs_port=ports.gcs, log_dir=log_dir)
     return ProcessPlan(sim=sim, runner=runner)
 
 
