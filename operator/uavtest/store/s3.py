@@ -42,6 +42,7 @@ _TRANSIENT_CODES = frozenset(
         "ServiceUnavailable",
         "SlowDown",
         "XMinioServerNotInitialized",
+        "XMinioIAMNotInitialized",  # MinIO answers before its IAM is up: restarting, not refusing
         "XMinioReadQuorum",
         "XMinioWriteQuorum",
     }

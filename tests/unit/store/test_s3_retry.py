@@ -47,6 +47,7 @@ def test_transient_and_permanent_s3_errors_are_told_apart() -> None:
 
     assert is_transient(s3_error("SlowDown"))
     assert is_transient(s3_error("XMinioServerNotInitialized"))
+    assert is_transient(s3_error("XMinioIAMNotInitialized"))  # a (re)starting MinIO, seen in CI
     assert not is_transient(s3_error("AccessDenied"))
     assert not is_transient(s3_error("NoSuchKey"))
     assert is_transient(ConnectionRefusedError())
