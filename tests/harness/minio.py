@@ -106,10 +106,31 @@ def _live(url: str) -> bool:
         return False
 
 
+def _serving(server: MinioServer) -> bool:
+    """True once an authenticated S3 call succeeds.
+
+    /minio/health/live answers 200 while MinIO is still initializing its object layer and IAM; calls
+    made then fail with XMinioServerNotInitialized / XMinioIAMNotInitialized. Tests want a server
+    that answers as a settled one would, so readiness is a real ListBuckets with the root credentials.
+    """
+    from minio.error import S3Error
+    from urllib3.exceptions import HTTPError
+
+    try:
+        server.client().list_buckets()
+    except S3Error as e:
+        if e.code.startswith("XMinio") and "NotInitialized" in e.code:
+            return False
+        raise MinioError(f"minio at {server.endpoint} refused its root credentials: {e.code}") from e
+    except (HTTPError, OSError):  # not listening yet, or the connection dropped
+        return False
+    return True
+
+
 def start_minio(
     root: Path | str | None = None, *, binary: Path | str | None = None, attempts: int = 3
 ) -> MinioServer:
-    """Start MinIO on a free 127.0.0.1 port with random root credentials; return once it is live.
+    """Start MinIO on a free 127.0.0.1 port with random root credentials; return once it serves S3.
 
     ROOT (default: a new temp dir, removed on stop) holds data/, certs/ and minio.log.
     """
@@ -156,7 +177,7 @@ def start_minio(
         server = MinioServer(endpoint, access_key, secret_key, base, proc, owns_root=False)
         deadline = time.monotonic() + READY_TIMEOUT
         while proc.poll() is None and time.monotonic() < deadline:
-            if _live(server.url):
+            if _live(server.url) and _serving(server):
                 server.owns_root = owns_root
                 return server
             time.sleep(0.1)
