@@ -121,7 +121,7 @@ def test_a_deleted_replica_pod_is_retried_and_counted_once(
     wait_pod_running(cluster, namespace, selector)
     deleted = cluster.kubectl("get", "pods", "-n", namespace, "-l", selector, "-o", "name").split()
     assert len(deleted) == 1
-    # killed within a second (as a node loss would): the runner is PID 1 and outlives a plain SIGTERM
+    # killed within a second, as a node loss would (a plain delete stops both containers in ~0.7 s too)
     cluster.kubectl("delete", "-n", namespace, deleted[0], "--grace-period=1", "--wait=false")
     status = wait_complete(cluster, namespace, name)
     assert (status["replicas"], status["passed"], status["failed"], status["errors"]) == (2, 2, 0, 0), status
