@@ -157,6 +157,13 @@ def runner(
             "sticks stream or an obstacle is near)"
         ),
     ] = 1000,
+    arm_settle: Annotated[
+        float | None,
+        typer.Option(
+            help="vehicle seconds the vehicle must have reported ready-to-arm (SYS_STATUS pre-arm "
+            "check) before the runner arms it; default 10 for vehicle.simulator px4, else 0"
+        ),
+    ] = None,
 ) -> None:
     """Fly one replica against a MAVLink vehicle; store flight.ulg, trajectory.csv, result.json."""
     from uavtest.runner.main import run_replica_command
@@ -175,6 +182,7 @@ def runner(
             timeout=timeout,
             connect_timeout=connect_timeout,
             step_ms=step_ms,
+            arm_settle=arm_settle,
         )
     )
 

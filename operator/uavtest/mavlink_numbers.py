@@ -8,7 +8,11 @@ from __future__ import annotations
 
 from enum import IntEnum
 
-__all__ = ["LandedState", "MavCmd", "MavResult", "MissionResult", "ParamType"]
+__all__ = ["SYS_STATUS_PREARM_CHECK", "LandedState", "MavCmd", "MavResult", "MissionResult", "ParamType"]
+
+#: MAV_SYS_STATUS_PREARM_CHECK: PX4 sets this bit of SYS_STATUS.onboard_control_sensors_health while
+#: its pre-arm checks pass for the current mode (the same bit the simulator sets once it is ready)
+SYS_STATUS_PREARM_CHECK = 0x10000000
 
 
 class MavCmd(IntEnum):

@@ -78,8 +78,8 @@ def test_the_runner_flies_a_mission_on_px4_and_downloads_its_log(
             "takeoffAltitude": 10,
             "waypoints": [{"x": 30, "y": 0, "z": -10}, {"x": 30, "y": 30, "z": -10}],
         },
-        # PX4 SIH is ready ~36 s after boot; arming right then can stall the takeoff: start at 50 s
-        "commands": [{"at": 50, "action": "mode", "mode": "mission"}],
+        # as an Aerialist test would: PX4 SIH is ready ~36 s after boot, the runner arms 10 s later
+        "commands": [{"at": 1, "action": "mode", "mode": "mission"}],
     }
     doc = {
         "apiVersion": "uavtest.io/v1alpha1",

@@ -8,6 +8,12 @@ a switch to a mode that flies by itself (mission, hold, return, land, takeoff) o
 them. A refused arm is retried every second of vehicle time (PX4 refuses until its preflight
 checks pass) for ``arm_give_up_s``; other refusals are noted and the flight goes on (the vehicle
 decided — the verdict will tell); no ACK at all, or UNSUPPORTED, is a bench error.
+
+Arm settle (``arm_settle_ms``, 0 = off): PX4's pre-arm checks pass while its estimator is still
+settling, and a takeoff commanded at that moment can stall a metre above the ground. With a settle
+time the arm waits until SYS_STATUS has reported ready-to-arm (MAV_SYS_STATUS_PREARM_CHECK) without
+a break for that long; a vehicle that sends no SYS_STATUS is armed at once, and after
+``arm_give_up_ms`` of waiting the arm is sent anyway (the vehicle decides).
 """
 
 from __future__ import annotations
@@ -121,6 +127,7 @@ class CommandScheduler:
         send_attempts: int = 5,
         arm_retry_ms: int = 1000,
         arm_give_up_ms: int = 60_000,
+        arm_settle_ms: int = 0,
         stick_period_ms: int = 50,
     ) -> None:
         self._pending = deque(sorted(commands, key=lambda c: c.at))
@@ -129,6 +136,7 @@ class CommandScheduler:
         self.send_attempts = send_attempts
         self.arm_retry_ms = arm_retry_ms
         self.arm_give_up_ms = arm_give_up_ms
+        self.arm_settle_ms = arm_settle_ms
         self.stick_period_ms = stick_period_ms
         self.error: str | None = None
         self.notes: list[str] = []  # refusals the vehicle made; shown in the log and the result
@@ -140,6 +148,9 @@ class CommandScheduler:
         self._ack_deadline = math.inf
         self._retry_at_ms: float | None = None  # a refused arm waits for this vehicle time
         self._first_refusal_ms: int | None = None
+        self._status_seen = False  # the vehicle reports its pre-arm state (SYS_STATUS)
+        self._ready_since_ms: int | None = None  # vehicle time it became ready to arm (None: not ready)
+        self._waiting_since_ms: int | None = None  # an arm waits for the vehicle to settle, since then
 
     @property
     def idle(self) -> bool:
@@ -168,6 +179,23 @@ class CommandScheduler:
     def ack_deadline(self) -> float:
         return self._ack_deadline
 
+    def on_sys_status(self, ready_to_arm: bool, now_ms: int) -> None:
+        """Track how long the vehicle has been ready to arm without a break."""
+        self._status_seen = True
+        if not ready_to_arm:
+            self._ready_since_ms = None
+        elif self._ready_since_ms is None:
+            self._ready_since_ms = now_ms
+
+    def _settled_at(self, now_ms: int) -> float | None:
+        """Vehicle time an arm should wait for (None: arm now)."""
+        if self.arm_settle_ms <= 0 or not self._status_seen:
+            return None
+        if self._ready_since_ms is None:
+            return now_ms + self.arm_retry_ms  # not ready: look again later
+        at = self._ready_since_ms + self.arm_settle_ms
+        return at if at > now_ms else None
+
     def update(self, now_ms: int, wall: float, *, armed: bool) -> list[Outgoing]:
         """Run what is due at vehicle time ``now_ms``: new steps, resends, sticks."""
         if self.error:
@@ -189,6 +217,24 @@ class CommandScheduler:
             return []
         if step.kind is StepKind.DISARM and not armed:
             return []
+        if step.kind is StepKind.ARM:
+            wait = self._settled_at(now_ms)
+            if wait is not None:
+                log.info(
+                    "t=%.2f s: %s waits until the vehicle has been ready to arm for %g s",
+                    now_ms / 1000,
+                    step.label,
+                    self.arm_settle_ms / 1000,
+                )
+                self._current = step
+                self._waiting_since_ms = now_ms
+                self._first_refusal_ms = None
+                self._retry_at_ms = wait
+                self._ack_deadline = math.inf
+                return []
+        return self._send(step, now_ms, wall)
+
+    def _send(self, step: Step, now_ms: int, wall: float) -> list[Outgoing]:
         self.sent.append((now_ms, step.label))
         log.info("t=%.2f s: %s", now_ms / 1000, step.label)
         if step.kind is StepKind.STICKS:
@@ -211,6 +257,17 @@ class CommandScheduler:
         if self._retry_at_ms is not None:
             if now_ms < self._retry_at_ms:
                 return []
+            if self._waiting_since_ms is not None:  # an arm waiting for the vehicle to settle
+                wait = self._settled_at(now_ms)
+                if wait is not None and now_ms - self._waiting_since_ms < self.arm_give_up_ms:
+                    self._retry_at_ms = wait
+                    return []
+                if wait is not None:
+                    given = self.arm_give_up_ms / 1000
+                    log.warning("vehicle not settled after %g s; sending %s anyway", given, step.label)
+                self._waiting_since_ms = None
+                self._retry_at_ms = None
+                return self._send(step, now_ms, wall)
             self._retry_at_ms = None
             self._confirmation = 0
             self._ack_deadline = wall + self.ack_timeout_s
@@ -266,5 +323,6 @@ class CommandScheduler:
 
     def _done(self) -> None:
         self._current = None
+        self._waiting_since_ms = None
         self._ack_deadline = math.inf
         self._retry_at_ms = None

@@ -41,6 +41,7 @@ from uavtest.runner.events import (
     Outgoing,
     ParamValue,
     StatusText,
+    SysStatus,
     VehicleTime,
 )
 from uavtest.runner.grants import DEFAULT_STEP_MS, FINE_MS, grant_until
@@ -95,6 +96,7 @@ class CoreConfig:
     heartbeat_ms: int = 1000  # GCS heartbeat period
     retry_s: float = 1.0  # protocol retry interval (wall)
     settle_s: float = 3.0  # wall seconds to wait for the disarm after the verdict is settled
+    arm_settle_s: float = 0.0  # vehicle seconds ready-to-arm before arming (0: arm when due)
     download_log: bool = False  # stage 6 over MAVLink (PX4 without a shared log directory)
 
 
@@ -141,7 +143,9 @@ class ReplicaCore:
         self.monitor = FlightMonitor(config.obstacles, config.geofence)
         self.params = ParamSetter(config.params, retry_s=config.retry_s)
         self.uploader = MissionUploader(config.mission, retry_s=config.retry_s)
-        self.scheduler = CommandScheduler(config.commands, ack_timeout_s=config.retry_s)
+        self.scheduler = CommandScheduler(
+            config.commands, ack_timeout_s=config.retry_s, arm_settle_ms=round(config.arm_settle_s * 1000)
+        )
         self.downloader = LogDownloader(retry_s=config.retry_s)
         self._have_local = False
         self._have_global = False
@@ -191,6 +195,9 @@ class ReplicaCore:
             return self._on_command_ack(msg, wall)
         if isinstance(msg, ExtendedSysState):
             self.landed_state = msg.landed_state
+            return []
+        if isinstance(msg, SysStatus):
+            self.scheduler.on_sys_status(msg.ready_to_arm, self.now_ms)
             return []
         if isinstance(msg, MissionItemReached):
             self.report.mission_reached.add(msg.seq)

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from uavtest.mavlink_numbers import SYS_STATUS_PREARM_CHECK
+
 __all__ = [
     "ARMED_FLAG",
     "CommandAck",
@@ -38,6 +40,7 @@ __all__ = [
     "ParamSet",
     "ParamValue",
     "StatusText",
+    "SysStatus",
     "VehicleTime",
 ]
 
@@ -131,6 +134,18 @@ class CommandAck:
 @dataclass(frozen=True, slots=True)
 class ExtendedSysState:
     landed_state: int  # MAV_LANDED_STATE: 0 unknown, 1 on ground, 2 in air, 3 takeoff, 4 landing
+
+
+@dataclass(frozen=True, slots=True)
+class SysStatus:
+    """SYS_STATUS, reduced to what the runner uses: PX4 sets MAV_SYS_STATUS_PREARM_CHECK in
+    ``onboard_control_sensors_health`` while its pre-arm checks pass in the current mode."""
+
+    sensors_health: int
+
+    @property
+    def ready_to_arm(self) -> bool:
+        return bool(self.sensors_health & SYS_STATUS_PREARM_CHECK)
 
 
 @dataclass(frozen=True, slots=True)

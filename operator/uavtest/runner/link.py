@@ -50,6 +50,7 @@ from uavtest.runner.events import (
     ParamSet,
     ParamValue,
     StatusText,
+    SysStatus,
     VehicleTime,
 )
 
@@ -94,6 +95,7 @@ def _named_value_int(m: Any) -> LockstepAnnounce | None:
 #: message id → converter from the pymavlink message to an event (None: not for us)
 _DECODERS: dict[int, Callable[[Any], Incoming | None]] = {
     0: _heartbeat,
+    1: lambda m: SysStatus(m.onboard_control_sensors_health),
     2: lambda m: VehicleTime(m.time_boot_ms),  # SYSTEM_TIME
     22: lambda m: ParamValue(m.param_id, m.param_value, m.param_type, m.param_index, m.param_count),
     32: lambda m: LocalPosition(m.time_boot_ms, m.x, m.y, m.z),

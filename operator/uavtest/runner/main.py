@@ -58,6 +58,9 @@ class RunnerOptions(BaseModel):
     step_ms: int = Field(
         DEFAULT_STEP_MS, ge=1, le=10_000, description="largest lockstep grant, vehicle milliseconds"
     )
+    arm_settle: float | None = Field(
+        None, ge=0, description="vehicle seconds ready-to-arm before arming; default by simulator"
+    )
 
 
 class Interrupted(InfrastructureError):
@@ -104,6 +107,7 @@ def _fly(opts: RunnerOptions, spec: UavTestSpec) -> FlightReport:
         connect_timeout_s=opts.connect_timeout,
         step_ms=opts.step_ms,
         download_log=opts.log_dir is None,
+        arm_settle_s=opts.arm_settle,
     )
     core = ReplicaCore(config)
     with UdpLink(opts.connect) as link:
@@ -194,6 +198,7 @@ def run_replica_command(
     timeout: float | None = None,
     connect_timeout: float = 30.0,
     step_ms: int = DEFAULT_STEP_MS,
+    arm_settle: float | None = None,
 ) -> int:
     """``uavtest runner``: fly one replica; print its ReplicaResult JSON as the last stdout line."""
     logging.basicConfig(
@@ -214,6 +219,7 @@ def run_replica_command(
         timeout=timeout,
         connect_timeout=connect_timeout,
         step_ms=step_ms,
+        arm_settle=arm_settle,
     )
     previous = {s: signal.signal(s, _on_signal) for s in (signal.SIGTERM, signal.SIGINT)}
     code: ExitCode | None = None

@@ -12,9 +12,17 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from typing import Any
 
-from uavtest.mavlink_numbers import LandedState, MavCmd, MavResult, MissionResult, ParamType
+from uavtest.mavlink_numbers import (
+    SYS_STATUS_PREARM_CHECK,
+    LandedState,
+    MavCmd,
+    MavResult,
+    MissionResult,
+    ParamType,
+)
 
 __all__ = [
+    "SYS_STATUS_PREARM_CHECK",
     "SYS_STATUS_SENSORS",
     "LandedState",
     "MavCmd",
@@ -89,5 +97,4 @@ class MavSeverity(IntEnum):
 # angular rate / attitude / yaw / z-altitude / xy-position control, motor outputs, AHRS,
 # battery) plus MAV_SYS_STATUS_PREARM_CHECK (set when ready to arm).
 SYS_STATUS_SENSORS = 1 | 2 | 4 | 8 | 32 | 1024 | 2048 | 4096 | 8192 | 16384 | 32768 | 2097152 | 33554432
-SYS_STATUS_PREARM_CHECK = 268435456
 SYS_STATUS_GPS = 32

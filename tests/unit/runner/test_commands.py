@@ -114,3 +114,36 @@ def test_ack_of_another_command_is_not_taken_for_ours() -> None:
     s.update(0, 0.0, armed=True)
     s.handle_ack(CommandAck(ARM, AckResult.ACCEPTED), 0, 0.0)
     assert not s.idle
+
+
+def test_with_an_arm_settle_the_arm_waits_until_the_vehicle_has_been_ready_that_long() -> None:
+    s = CommandScheduler([cmd(1.0, "mode", mode="mission")], arm_settle_ms=10_000, arm_retry_ms=1000)
+    s.on_sys_status(False, 500)
+    assert s.update(1000, 0.0, armed=False) == []  # PX4 still failing its pre-arm checks
+    s.on_sys_status(True, 35_600)  # ready ...
+    s.on_sys_status(False, 36_000)  # ... but not for good: the settle starts again
+    s.on_sys_status(True, 37_000)
+    assert s.update(36_500, 0.0, armed=False) == []
+    assert s.update(46_999, 0.0, armed=False) == []
+    s.on_sys_status(True, 47_000)  # still ready: the clock does not restart
+    assert s.update(47_000, 0.0, armed=False) == [arm_command()]
+    s.handle_ack(CommandAck(ARM, AckResult.ACCEPTED), 47_050, 0.1)
+    assert s.update(47_100, 0.1, armed=True) == [mode_command(FlightMode.MISSION)]
+    assert s.sent[0] == (47_000, "arm (for mode mission)")
+
+
+def test_the_arm_settle_does_not_hold_a_vehicle_without_sys_status_or_forever() -> None:
+    silent = CommandScheduler([cmd(1.0, "arm")], arm_settle_ms=10_000)
+    assert silent.update(1000, 0.0, armed=False) == [arm_command()]  # no SYS_STATUS: armed when due
+    never = CommandScheduler([cmd(1.0, "arm")], arm_settle_ms=10_000, arm_give_up_ms=5000)
+    never.on_sys_status(False, 0)
+    assert never.update(1000, 0.0, armed=False) == []
+    assert never.update(5000, 0.0, armed=False) == []
+    assert never.update(6000, 0.0, armed=False) == [arm_command()]  # the vehicle decides now
+    assert never.error is None
+
+
+def test_without_an_arm_settle_sys_status_changes_nothing() -> None:
+    s = CommandScheduler([cmd(1.0, "arm")])
+    s.on_sys_status(False, 0)
+    assert s.update(1000, 0.0, armed=False) == [arm_command()]

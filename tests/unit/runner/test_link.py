@@ -22,10 +22,12 @@ from uavtest.runner.events import (
     ParamSet,
     ParamValue,
     StatusText,
+    SysStatus,
 )
 from uavtest.runner.link import MavlinkCodec, UdpLink, parse_endpoint
 
 VEHICLE = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+PREARM = mavlink2.MAV_SYS_STATUS_PREARM_CHECK
 
 
 def frame(msg: mavlink2.MAVLink_message) -> bytes:
@@ -47,6 +49,7 @@ def test_vehicle_messages_become_events() -> None:
             frame(VEHICLE.named_value_int_encode(1250, b"OTHER", 7)),
             frame(VEHICLE.statustext_encode(4, b"Takeoff detected")),
             frame(VEHICLE.log_data_encode(3, 180, 4, b"\x01\x02\x03\x04".ljust(90, b"\0"))),
+            frame(VEHICLE.sys_status_encode(0, 0, PREARM | 32, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0)),
         ]
     )
     events = codec.decode(data)
@@ -60,9 +63,11 @@ def test_vehicle_messages_become_events() -> None:
         LockstepAnnounce(1250),
         StatusText(4, "Takeoff detected"),
         LogData(3, 180, b"\x01\x02\x03\x04"),
+        SysStatus(PREARM | 32),
     ]
     assert events[0].armed  # type: ignore[union-attr]
-    assert codec.frames == 11 and codec.decoded == 9
+    assert events[-1].ready_to_arm and not SysStatus(32).ready_to_arm  # type: ignore[union-attr]
+    assert codec.frames == 12 and codec.decoded == 10
 
 
 def test_a_corrupt_frame_is_dropped_and_the_next_one_still_decodes() -> None:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from uavtest.analysis.models import ReplicaResult, Verdict
 from uavtest.runner.main import exit_code
-from uavtest.runner.plan import flight_commands, plan_flight
+from uavtest.runner.plan import PX4_ARM_SETTLE_S, flight_commands, plan_flight
 from uavtest.spec.loaders import load_test
 from uavtest.spec.models import CommandAction, FlightMode, UavTestSpec
 
@@ -37,6 +37,14 @@ def test_the_plan_carries_params_mission_obstacles_and_timeout() -> None:
     assert [i.command for i in cfg.mission] == [22, 16, 21]  # takeoff, waypoint, land
     assert len(cfg.obstacles) == 1 and cfg.timeout_s == 90 and cfg.step_ms == 20
     assert plan_flight(spec, endpoint="udpin:127.0.0.1:1", timeout_s=10).timeout_s == 10
+
+
+def test_px4_is_armed_only_once_it_has_been_ready_a_while_and_the_builtin_sim_at_once() -> None:
+    builtin = UavTestSpec.model_validate(WAYPOINTS)
+    px4 = UavTestSpec.model_validate({**WAYPOINTS, "vehicle": {"simulator": "px4"}})
+    assert plan_flight(builtin, endpoint="udpin:127.0.0.1:1").arm_settle_s == 0
+    assert plan_flight(px4, endpoint="udpin:127.0.0.1:1").arm_settle_s == PX4_ARM_SETTLE_S > 0
+    assert plan_flight(px4, endpoint="udpin:127.0.0.1:1", arm_settle_s=2.5).arm_settle_s == 2.5
 
 
 def test_the_competition_mission_plans_into_wire_items(shared_data: Path) -> None:

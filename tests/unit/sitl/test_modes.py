@@ -77,4 +77,5 @@ def test_mavlink_numbers_match_pymavlink():
                 name = "MAV_MISSION_" + member.name
             assert getattr(mavlink2, name) == member.value, name
     assert mavlink2.MAV_AUTOPILOT_PX4 == mav.MAV_AUTOPILOT_PX4
+    assert mavlink2.MAV_SYS_STATUS_PREARM_CHECK == mav.SYS_STATUS_PREARM_CHECK
     assert mavlink2.MAV_TYPE_QUADROTOR == mav.MAV_TYPE_QUADROTOR
