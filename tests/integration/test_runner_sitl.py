@@ -245,3 +245,23 @@ def test_the_grant_size_changes_the_cost_not_the_flight(tmp_path: Path) -> None:
         grants.append(int(counted.group(1)))
     assert fine.artifact("trajectory.csv").read_text() == large.artifact("trajectory.csv").read_text()
     assert grants[1] * 4 < grants[0]  # far fewer round trips
+
+
+def test_without_a_shared_log_folder_the_runner_downloads_the_log_over_mavlink(tmp_path: Path) -> None:
+    # as against PX4 without a shared folder: the simulator serves its finished log through the
+    # MAVLink log protocol, and the runner stores exactly the bytes the simulator wrote
+    replica = make_replica(tmp_path, SHORT_MISSION, name="download")
+    cmd = replica.runner_cmd()
+    at = cmd.index("--log-dir")
+    del cmd[at : at + 2]
+    with simulator(replica, tmp_path):
+        done = subprocess.run(
+            cmd, capture_output=True, text=True, timeout=RUN_TIMEOUT, stdin=subprocess.DEVNULL
+        )
+    result = ReplicaResult.model_validate_json(done.stdout.strip().splitlines()[-1])
+    assert result.verdict is Verdict.PASS, f"{result.reason}\n{done.stderr[-3000:]}"
+    assert done.returncode == 0
+    assert re.search(r"downloading log 0 \(\d+ bytes\)", done.stderr), done.stderr[-3000:]
+    written = sorted(replica.log_dir.glob("*.ulg"))
+    assert len(written) == 1
+    assert replica.artifact("flight.ulg").read_bytes() == written[0].read_bytes()

@@ -4,7 +4,8 @@ A multicopter that speaks MAVLink 2 like PX4 SITL, flies missions, hold, takeoff
 return and stick modes with PX4's parameters, in a world of box obstacles and wind, and writes
 a PX4-style ULog. The vehicle is pure code (``vehicle.Vehicle``: messages and clock ticks in,
 messages out); ``main.run_sitl`` is the process edge (UDP links, lockstep or speed factor,
-signals, log files); ``inprocess.fly_mission`` flies a mission without sockets.
+signals, log files, and ``logserver.LogServer`` serving finished logs over MAVLink);
+``inprocess.fly_mission`` flies a mission without sockets.
 """
 
 __all__ = ["SimConfig", "Vehicle"]

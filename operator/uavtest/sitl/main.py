@@ -22,7 +22,9 @@ This is the I/O edge around the pure ``Vehicle``:
 - free-running (default): the vehicle clock runs at ``speed_factor`` times the wall clock.
 - logs: ``<log_dir>/seed<S>-<n>.ulg`` (``.ulg.part`` while open); SIGTERM/SIGINT close the log
   cleanly and end the process with exit code 0, at once: a wake-up pipe
-  (``signal.set_wakeup_fd``) ends the ``select`` wait as the signal arrives.
+  (``signal.set_wakeup_fd``) ends the ``select`` wait as the signal arrives. Finished logs can
+  also be downloaded over MAVLink as from PX4 (``uavtest.sitl.logserver``), streamed to the link
+  that asked in batches every ``LOG_PACE_S``.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from pathlib import Path
 from types import FrameType
 
 from uavtest.errors import BadInput, InfrastructureError
+from uavtest.sitl.logserver import LogServer
 from uavtest.sitl.mav import Msg
 from uavtest.sitl.mavlink_io import Codec
 from uavtest.sitl.ulog_writer import ULogFile
@@ -53,6 +56,7 @@ REANNOUNCE_S = 0.2
 SEARCH_REANNOUNCE_S = 0.02  # ... until a client has spoken (it may bind its port just after we start)
 IDLE_EXIT_S = 60.0  # lockstep: wall seconds without client traffic before the simulator ends
 DATAGRAM_BYTES = 1400
+LOG_PACE_S = 0.002  # one batch of LOG_DATA (32 x 90 bytes) per 2 ms: ~1.4 MB/s, as a client can read
 _ALWAYS = frozenset({"HEARTBEAT", "STATUSTEXT", "NAMED_VALUE_INT"})
 
 
@@ -220,6 +224,8 @@ def run_sitl(
     config = load_config(test, seed)
     sink = FileLogSink(log_dir, seed)
     vehicle = Vehicle(config, sink)
+    log_server = LogServer(lambda: sink.closed)
+    log_link: list[Link] = []  # the link a log download was asked on
     local_api = api_port + 40 if api_local_port is None else api_local_port
     links = [
         Link("api", _bind(host, local_api), (host, api_port)),
@@ -273,7 +279,12 @@ def run_sitl(
                     broadcast(vehicle.advance(until_us))
                     granted = True
                 continue
-            for reply in vehicle.receive(msg):
+            replies = log_server.handle(msg)
+            if replies is not None:
+                log_link[:] = [link]
+            else:
+                replies = vehicle.receive(msg)
+            for reply in replies:
                 link.queue(reply)
             broadcast(vehicle.drain())
         return granted
@@ -302,6 +313,8 @@ def run_sitl(
                     broadcast(vehicle.advance(target))
                     flush()
                 timeout = max(0.0005, STEP_US * 5 / 1e6 / speed_factor)
+            if log_server.streaming:
+                timeout = min(timeout, LOG_PACE_S)
             ready, _, _ = select.select(fds, [], [], timeout)
             granted = False
             for fd in ready:
@@ -321,6 +334,9 @@ def run_sitl(
                     granted |= handle(link, data, addr)
             if stop.requested:
                 break
+            if log_server.streaming and log_link:
+                for msg in log_server.next_batch():
+                    log_link[0].queue(msg)
             if lockstep:
                 now = time.monotonic()
                 if granted:
@@ -339,6 +355,7 @@ def run_sitl(
         if ended:
             log.warning("uavtest sitl: %s; closing the log and exiting", ended)
         vehicle.recorder.stop()
+        log_server.close()
         for link in links:
             link.sock.close()
         wakeup.close()
