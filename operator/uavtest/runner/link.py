@@ -119,11 +119,13 @@ def _fast(
     return cls.unpacker, cls.unpacker.size, cls.crc_extra, build
 
 
-#: the messages of every lockstep step, unpacked straight from the payload with pymavlink's own
-#: struct layout and CRC extra (a full pymavlink decode costs several times more)
+#: the messages of every lockstep step (and SYS_STATUS, 1 Hz of vehicle time), unpacked straight
+#: from the payload with pymavlink's own struct layout and CRC extra (a full pymavlink decode costs
+#: several times more)
 _FAST: dict[int, tuple[Any, int, int, Callable[..., Any]]] = {
     32: _fast(mavlink2.MAVLink_local_position_ned_message, lambda f: LocalPosition(f[0], f[1], f[2], f[3])),
     33: _fast(mavlink2.MAVLink_global_position_int_message, lambda f: GlobalPosition(f[0], f[1], f[2], f[4])),
+    1: _fast(mavlink2.MAVLink_sys_status_message, lambda f: SysStatus(f[2])),  # sensors health
     252: _fast(
         mavlink2.MAVLink_named_value_int_message,
         lambda f: LockstepAnnounce(f[1]) if f[2].rstrip(b"\0") == b"LOCKSTEP" else None,

@@ -225,7 +225,7 @@ def run_sitl(
     sink = FileLogSink(log_dir, seed)
     vehicle = Vehicle(config, sink)
     log_server = LogServer(lambda: sink.closed)
-    log_link: list[Link] = []  # the link a log download was asked on
+    log_link: Link | None = None  # the link a log download was asked on
     local_api = api_port + 40 if api_local_port is None else api_local_port
     links = [
         Link("api", _bind(host, local_api), (host, api_port)),
@@ -269,6 +269,7 @@ def run_sitl(
 
     def handle(link: Link, data: bytes, addr: tuple[str, int]) -> bool:
         """Handle one datagram; True when it held a lockstep grant that advanced the clock."""
+        nonlocal log_link
         link.dest = addr
         link.peer_seen = True
         granted = False
@@ -281,7 +282,7 @@ def run_sitl(
                 continue
             replies = log_server.handle(msg)
             if replies is not None:
-                log_link[:] = [link]
+                log_link = link
             else:
                 replies = vehicle.receive(msg)
             for reply in replies:
@@ -334,9 +335,9 @@ def run_sitl(
                     granted |= handle(link, data, addr)
             if stop.requested:
                 break
-            if log_server.streaming and log_link:
+            if log_server.streaming and log_link is not None:
                 for msg in log_server.next_batch():
-                    log_link[0].queue(msg)
+                    log_link.queue(msg)
             if lockstep:
                 now = time.monotonic()
                 if granted:
