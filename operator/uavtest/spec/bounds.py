@@ -25,6 +25,7 @@ __all__ = [
     "PARAM_FLOAT_MAX",
     "PARAM_INT_MAX",
     "PARAM_INT_MIN",
+    "SPEED_FACTOR_MAX",
     "SPEED_MAX",
     "WIND_MAX",
     "Altitude",
@@ -60,6 +61,8 @@ OBSTACLE_SIZE_MAX = 1_000.0
 WIND_MAX = 50.0
 #: ground / climb speeds, m/s
 SPEED_MAX = 50.0
+#: simulator speed factor (times real time)
+SPEED_FACTOR_MAX = 1_000.0
 #: durations, times on the vehicle clock, timeouts: one day, seconds
 DURATION_MAX = 86_400.0
 #: PX4 parameters are INT32 or FLOAT (IEEE single precision)
