@@ -35,9 +35,10 @@ from typing import Any
 from pydantic import ValidationError
 
 from uavtest.errors import BadInput
+from uavtest.spec.bounds import ALTITUDE_MAX, ALTITUDE_MIN, DURATION_MAX, LOCAL_MAX, SPEED_FACTOR_MAX
 from uavtest.spec.commands_csv import command_from_aerialist, read_commands_csv
 from uavtest.spec.models import API_VERSION, KIND, Obstacle, SimilarityMetric, Wind
-from uavtest.spec.params_csv import read_params_csv
+from uavtest.spec.params_csv import PARAM_VALUE_ALLOWED, check_param_value, read_params_csv
 from uavtest.spec.paths import resolve_reference
 from uavtest.spec.validation import bad_input_from
 
@@ -188,13 +189,13 @@ def from_aerialist(doc: Mapping[str, Any], source: str, test_file: Path | None) 
                 allowed="NAME: number",
             )
         for name, value in inline.items():
-            if not _is_number(value):
+            if not check_param_value(value):
                 raise BadInput(
-                    "parameter value is not a number",
+                    "parameter value is not a finite number in PX4's range",
                     file=source,
                     field=f"{key['robot']}.params.{name}",
                     value=value,
-                    allowed="a number",
+                    allowed=PARAM_VALUE_ALLOWED,
                 )
         params.update(inline)
     if params:
@@ -239,15 +240,25 @@ def from_aerialist(doc: Mapping[str, Any], source: str, test_file: Path | None) 
         spec["world"] = world
     timeout = simulation.get("timeout")
     if timeout is not None and not (_is_number(timeout) and timeout <= 0):  # upstream: -1 means none
-        if not _is_number(timeout):
+        if not _is_number(timeout) or timeout > DURATION_MAX:
             raise BadInput(
-                "timeout is not a number",
+                "timeout is not a number in range",
                 file=source,
                 field="simulation.timeout",
                 value=timeout,
-                allowed="seconds > 0 (or -1 for the default)",
+                allowed=f"seconds > 0 and <= {DURATION_MAX:g} (or -1 for the default)",
             )
         spec["timeout"] = float(timeout)
+    for section, field in (("simulation", "speed"), ("mission", "speed")):
+        factor = sections.get(section, {}).get(field)
+        if factor is not None and not (_is_number(factor) and 0 < factor <= SPEED_FACTOR_MAX):
+            raise BadInput(
+                "speed is not a number in range (it is ignored, but must make sense)",
+                file=source,
+                field=f"{key.get(section, section)}.{field}",
+                value=factor,
+                allowed=f"a number > 0 and <= {SPEED_FACTOR_MAX:g}",
+            )
 
     # commands
     commands = [c.dump() for c in read_commands_csv(commands_path)] if commands_path else []
@@ -330,13 +341,13 @@ def _home(raw: Any, source: str) -> dict[str, float]:
             allowed="[lat, lon, alt]: degrees, degrees, metres AMSL",
         )
     lat, lon, alt = (float(v) for v in raw)
-    if not (-90 <= lat <= 90 and -180 <= lon <= 180):
+    if not (-90 <= lat <= 90 and -180 <= lon <= 180 and ALTITUDE_MIN <= alt <= ALTITUDE_MAX):
         raise BadInput(
             "home position out of range",
             file=source,
             field="simulation.home_position",
             value=raw,
-            allowed="lat -90..90, lon -180..180",
+            allowed=f"lat -90..90, lon -180..180, alt {ALTITUDE_MIN:g}..{ALTITUDE_MAX:g} m AMSL",
         )
     return {"lat": lat, "lon": lon, "alt": alt}
 
@@ -468,14 +479,23 @@ def _waypoints(raw: Any, source: str, section: str) -> list[dict[str, Any]]:
                 value=wp,
                 allowed="{x North, y East, z up, r yaw} in metres and degrees",
             )
+        for axis in ("x", "y"):
+            if abs(wp[axis]) > LOCAL_MAX:
+                raise BadInput(
+                    "waypoint out of range",
+                    file=source,
+                    field=f"{where}.{axis}",
+                    value=wp[axis],
+                    allowed=f"metres from home >= {-LOCAL_MAX:g} and <= {LOCAL_MAX:g}",
+                )
         up = wp.get("z", 0.0)
-        if not _is_number(up) or up < 0:
+        if not _is_number(up) or not 0 <= up <= ALTITUDE_MAX:
             raise BadInput(
                 "waypoint height must be a number >= 0",
                 file=source,
                 field=f"{where}.z",
                 value=up,
-                allowed="metres above home, >= 0",
+                allowed=f"metres above home, >= 0 and <= {ALTITUDE_MAX:g}",
             )
         result.append({"x": float(wp["x"]), "y": float(wp["y"]), "z": -float(up)})
     return result

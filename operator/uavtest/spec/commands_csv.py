@@ -14,8 +14,13 @@ import math
 from collections.abc import Mapping
 from pathlib import Path
 
+from pydantic import ValidationError
+
 from uavtest.errors import BadInput, MissingFile
+from uavtest.spec.bounds import DURATION_MAX
 from uavtest.spec.models import Command, CommandAction, FlightMode, Sticks
+from uavtest.spec.validation import bad_input_from
+from uavtest.spec.yaml_io import check_file_size
 
 __all__ = [
     "AERIALIST_MODES",
@@ -60,13 +65,21 @@ def command_from_aerialist(row: Mapping[str, object], where: str, source: str) -
 
     ``where`` names the row for messages (``row 3``, ``mission.commands[2]``).
     """
-    timestamp = _number(row.get("timestamp"), f"{where}, timestamp", source, "microseconds, a number >= 0")
+    timestamp_allowed = f"microseconds on the vehicle clock, >= 0 and <= {DURATION_MAX * 1e6:.0f} (a day)"
+    timestamp = _number(row.get("timestamp"), f"{where}, timestamp", source, timestamp_allowed)
     if timestamp < 0:
         raise BadInput(
             f"{where}: timestamp is negative",
             file=source,
             value=row.get("timestamp"),
-            allowed="microseconds on the vehicle clock, >= 0",
+            allowed=timestamp_allowed,
+        )
+    if timestamp > DURATION_MAX * 1e6:
+        raise BadInput(
+            f"{where}: timestamp out of range",
+            file=source,
+            value=row.get("timestamp"),
+            allowed=timestamp_allowed,
         )
     code_value = _number(row.get("mode"), f"{where}, mode", source, _ALLOWED_CODES)
     if code_value != int(code_value):
@@ -76,8 +89,13 @@ def command_from_aerialist(row: Mapping[str, object], where: str, source: str) -
             value=row.get("mode"),
             allowed=_ALLOWED_CODES,
         )
-    code = int(code_value)
-    at = timestamp / 1e6
+    try:
+        return _command(timestamp / 1e6, int(code_value), row, where, source)
+    except ValidationError as e:  # a safety net: the checks name the row and column
+        raise bad_input_from(e, source=source, root=Command, prefix=where) from None
+
+
+def _command(at: float, code: int, row: Mapping[str, object], where: str, source: str) -> Command:
     if code in AERIALIST_MODES:
         return Command(at=at, action=CommandAction.MODE, mode=AERIALIST_MODES[code])
     if code == ARM_CODE:
@@ -168,6 +186,7 @@ def read_commands_csv(path: Path) -> list[Command]:
             file=str(path),
             allowed="an Aerialist commands CSV",
         )
+    check_file_size(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:

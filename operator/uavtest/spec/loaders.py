@@ -24,7 +24,7 @@ from uavtest.spec.params_csv import read_params_csv
 from uavtest.spec.paths import resolve_reference
 from uavtest.spec.plan import parse_plan, plan_home, read_plan
 from uavtest.spec.validation import bad_input_from, model_fields_of
-from uavtest.spec.yaml_io import parse_yaml
+from uavtest.spec.yaml_io import check_file_size, parse_yaml
 
 __all__ = ["load_test", "load_test_text", "resolve_references"]
 
@@ -32,6 +32,7 @@ __all__ = ["load_test", "load_test_text", "resolve_references"]
 def load_test(path: Path) -> UavTest:
     """The test in ``path`` (native or Aerialist YAML), with its referenced files inlined."""
     path = Path(path)
+    check_file_size(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:

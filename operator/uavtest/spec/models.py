@@ -13,6 +13,30 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pydantic.alias_generators import to_camel
 
+from uavtest.spec.bounds import (
+    LOCAL_MAX,
+    Altitude,
+    AltitudeAmsl,
+    Degrees,
+    Distance,
+    Down,
+    Duration,
+    Height,
+    Latitude,
+    Local,
+    Longitude,
+    NonNegativeDuration,
+    ObstacleSize,
+    ParamFloat,
+    ParamInt,
+    PositiveDistance,
+    Seed,
+    Speed,
+    StickAxis,
+    Throttle,
+    WindSpeed,
+)
+
 __all__ = [
     "API_GROUP",
     "API_VERSION",
@@ -71,7 +95,8 @@ class Simulator(StrEnum):
     PX4 = "px4"
 
 
-ParamValue = int | float
+#: PX4 parameters are INT32 or FLOAT; a float must be finite
+ParamValue = ParamInt | ParamFloat
 
 
 class Vehicle(Model):
@@ -89,22 +114,22 @@ class Vehicle(Model):
 
 
 class Home(Model):
-    lat: float = Field(47.397742, ge=-90, le=90, description="latitude, degrees")
-    lon: float = Field(8.545594, ge=-180, le=180, description="longitude, degrees")
-    alt: float = Field(488.0, description="altitude AMSL, metres")
+    lat: Latitude = Field(47.397742, description="latitude, degrees")
+    lon: Longitude = Field(8.545594, description="longitude, degrees")
+    alt: AltitudeAmsl = Field(488.0, description="altitude AMSL, metres")
 
 
 class BoxSize(Model):
-    l: float = Field(gt=0, description="length along x (North) before yaw, metres")  # noqa: E741
-    w: float = Field(gt=0, description="width along y (East) before yaw, metres")
-    h: float = Field(gt=0, description="height, metres")
+    l: ObstacleSize = Field(description="length along x (North) before yaw, metres")  # noqa: E741
+    w: ObstacleSize = Field(description="width along y (East) before yaw, metres")
+    h: ObstacleSize = Field(description="height, metres")
 
 
 class BoxPosition(Model):
-    x: float = Field(description="centre North, metres")
-    y: float = Field(description="centre East, metres")
-    z: float = Field(0.0, description="base height above ground, metres (Aerialist convention, up)")
-    r: float = Field(0.0, description="yaw, degrees")
+    x: Local = Field(description="centre North, metres")
+    y: Local = Field(description="centre East, metres")
+    z: Altitude = Field(0.0, description="base height above ground, metres (Aerialist convention, up)")
+    r: Degrees = Field(0.0, description="yaw, degrees")
 
 
 class Obstacle(Model):
@@ -113,9 +138,9 @@ class Obstacle(Model):
 
 
 class Wind(Model):
-    mean_speed: float = Field(0.0, ge=0, description="mean wind speed, m/s")
-    max_speed: float | None = Field(None, ge=0, description="maximum speed in gusts, m/s")
-    direction: float = Field(0.0, description="direction the wind blows towards, degrees from North")
+    mean_speed: WindSpeed = Field(0.0, description="mean wind speed, m/s")
+    max_speed: WindSpeed | None = Field(None, description="maximum speed in gusts, m/s")
+    direction: Degrees = Field(0.0, description="direction the wind blows towards, degrees from North")
     gusts: bool = Field(True, description="random gusts between mean and max speed")
 
     @model_validator(mode="after")
@@ -159,20 +184,20 @@ class MissionItem(Model):
     """One mission item in global coordinates, altitude relative to home (MAV_FRAME_GLOBAL_RELATIVE_ALT)."""
 
     kind: MissionItemKind
-    lat: float | None = None
-    lon: float | None = None
-    alt: float | None = Field(None, description="metres above home")
-    hold: float = Field(0.0, ge=0, description="hold / loiter time at the item, seconds")
-    speed: float | None = Field(None, gt=0, description="changeSpeed: ground speed m/s")
+    lat: Latitude | None = None
+    lon: Longitude | None = None
+    alt: Altitude | None = Field(None, description="metres above home")
+    hold: NonNegativeDuration = Field(0.0, description="hold / loiter time at the item, seconds")
+    speed: Speed | None = Field(None, description="changeSpeed: ground speed m/s")
 
 
 class Waypoint(Model):
     """A NED waypoint relative to home: z is Down, so 10 m up is z: -10."""
 
-    x: float
-    y: float
-    z: float = Field(le=0, description="Down, metres; negative is up")
-    hold: float = Field(0.0, ge=0, description="seconds to hold at the waypoint")
+    x: Local = Field(description="North, metres")
+    y: Local = Field(description="East, metres")
+    z: Down = Field(description="Down, metres; negative is up")
+    hold: NonNegativeDuration = Field(0.0, description="seconds to hold at the waypoint")
 
 
 class Mission(Model):
@@ -183,8 +208,8 @@ class Mission(Model):
     waypoints: list[Waypoint] | None = Field(
         None, max_length=1000, description="NED waypoints, flown after takeoff"
     )
-    takeoff_altitude: float = Field(10.0, gt=0, description="metres above home")
-    takeoff_speed: float | None = Field(None, gt=0, description="climb speed m/s (PX4 MPC_TKO_SPEED)")
+    takeoff_altitude: Height = Field(10.0, description="metres above home")
+    takeoff_speed: Speed | None = Field(None, description="climb speed m/s (PX4 MPC_TKO_SPEED)")
     land: bool = Field(True, description="land at the end of a waypoint mission")
 
     @model_validator(mode="after")
@@ -227,20 +252,20 @@ class CommandAction(StrEnum):
 class Sticks(Model):
     """MANUAL_CONTROL sticks: x, y, r in [-1, 1]; z (throttle) in [0, 1], 0.5 holds altitude."""
 
-    x: float = Field(0.0, ge=-1, le=1)
-    y: float = Field(0.0, ge=-1, le=1)
-    z: float = Field(0.5, ge=0, le=1)
-    r: float = Field(0.0, ge=-1, le=1)
+    x: StickAxis = 0.0
+    y: StickAxis = 0.0
+    z: Throttle = 0.5
+    r: StickAxis = 0.0
 
 
 class Command(Model):
     """A command at a time on the vehicle clock (seconds since the vehicle booted)."""
 
-    at: float = Field(ge=0, description="seconds on the vehicle clock")
+    at: NonNegativeDuration = Field(description="seconds on the vehicle clock")
     action: CommandAction
     mode: FlightMode | None = Field(None, description="for action mode")
     sticks: Sticks | None = Field(None, description="for action sticks")
-    speed: float | None = Field(None, gt=0, description="for action speed: ground speed m/s")
+    speed: Speed | None = Field(None, description="for action speed: ground speed m/s")
 
     @model_validator(mode="after")
     def _arguments_match_action(self) -> Command:
@@ -265,14 +290,14 @@ class SimilarityMetric(StrEnum):
 class ReferenceTrajectory(Model):
     """A reference trajectory inline: rows of t (s), x, y, z (NED metres)."""
 
-    points: list[Annotated[list[float], Field(min_length=4, max_length=4)]] = Field(
+    points: list[Annotated[list[Local], Field(min_length=4, max_length=4)]] = Field(
         min_length=2, max_length=10000
     )
 
 
 class Similarity(Model):
     metric: SimilarityMetric = SimilarityMetric.DTW
-    threshold: float = Field(gt=0, description="largest allowed distance, metres (DTW: mean per step)")
+    threshold: PositiveDistance = Field(description="largest allowed distance, metres (DTW: mean per step)")
     log_file: str | None = Field(None, description="reference PX4 ULog; relative to the test file")
     reference: ReferenceTrajectory | None = Field(None, description="inline reference (render fills it)")
 
@@ -286,21 +311,31 @@ class Similarity(Model):
 class Geofence(Model):
     """An axis-aligned NED box the vehicle must stay in (metres from home)."""
 
-    min_x: float = -1e6
-    max_x: float = 1e6
-    min_y: float = -1e6
-    max_y: float = 1e6
-    min_z: float = Field(-1e6, description="Down: -120 means at most 120 m up")
-    max_z: float = 1e6
+    min_x: Local = -LOCAL_MAX
+    max_x: Local = LOCAL_MAX
+    min_y: Local = -LOCAL_MAX
+    max_y: Local = LOCAL_MAX
+    min_z: Local = Field(-LOCAL_MAX, description="Down: -120 means at most 120 m up")
+    max_z: Local = LOCAL_MAX
+
+    @model_validator(mode="after")
+    def _min_below_max(self) -> Geofence:
+        for axis in ("x", "y", "z"):
+            low, high = getattr(self, f"min_{axis}"), getattr(self, f"max_{axis}")
+            if not low < high:
+                raise ValueError(
+                    f"min{axis.upper()} {low:g} is not below max{axis.upper()} {high:g}: the box is empty"
+                )
+        return self
 
 
 class Assertions(Model):
     no_collision: bool = Field(True, description="the vehicle must not touch an obstacle")
-    min_obstacle_distance: float | None = Field(
-        1.5, ge=0, description="smallest allowed 3-D distance to any obstacle, metres (SBFT: 1.5)"
+    min_obstacle_distance: Distance | None = Field(
+        1.5, description="smallest allowed 3-D distance to any obstacle, metres (SBFT: 1.5)"
     )
     mission_completed: bool = Field(True, description="every mission item reached (when there is a mission)")
-    max_flight_time: float | None = Field(None, gt=0, description="seconds from takeoff to landing")
+    max_flight_time: Duration | None = Field(None, description="seconds from takeoff to landing")
     geofence: Geofence | None = None
     similarity: Similarity | None = None
 
@@ -310,9 +345,11 @@ class Assertions(Model):
 
 class UavTestSpec(Model):
     replicas: int = Field(1, ge=1, le=1000, description="how many times the test is flown")
-    parallelism: int | None = Field(None, ge=1, description="replicas at once (default: all / cores)")
-    seed: int | None = Field(None, ge=0, description="base seed; replica i flies with seed + i")
-    timeout: float = Field(600.0, gt=0, description="seconds of simulated time a replica may take")
+    parallelism: int | None = Field(
+        None, ge=1, le=1000, description="replicas at once (default: all / cores)"
+    )
+    seed: Seed | None = Field(None, description="base seed; replica i flies with seed + i")
+    timeout: Duration = Field(600.0, description="seconds of simulated time a replica may take")
     vehicle: Vehicle = Field(default_factory=Vehicle)
     world: World = Field(default_factory=World)
     mission: Mission | None = None

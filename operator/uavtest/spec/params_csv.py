@@ -13,8 +13,10 @@ import re
 from pathlib import Path
 
 from uavtest.errors import BadInput, MissingFile
+from uavtest.spec.bounds import PARAM_FLOAT_MAX, PARAM_INT_MAX, PARAM_INT_MIN
+from uavtest.spec.yaml_io import check_file_size
 
-__all__ = ["parse_params_csv", "read_params_csv"]
+__all__ = ["PARAM_VALUE_ALLOWED", "check_param_value", "parse_params_csv", "read_params_csv"]
 
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_]{0,15}$")  # PX4: at most 16 characters
 
@@ -46,11 +48,33 @@ def parse_params_csv(text: str, source: str) -> dict[str, int | float]:
     return params
 
 
+#: what a parameter value may be (PX4 stores INT32 or IEEE single-precision FLOAT)
+PARAM_VALUE_ALLOWED = (
+    f"a finite number: an integer from {PARAM_INT_MIN} to {PARAM_INT_MAX} (PX4 INT32) "
+    f"or a decimal within ±{PARAM_FLOAT_MAX:.1e} (PX4 FLOAT)"
+)
+
+
+def check_param_value(value: object) -> bool:
+    """True for a value PX4 can hold: an INT32 integer or a finite float within FLOAT's range."""
+    if isinstance(value, bool):
+        return False
+    if isinstance(value, int):
+        return PARAM_INT_MIN <= value <= PARAM_INT_MAX or abs(value) <= PARAM_FLOAT_MAX
+    return isinstance(value, float) and math.isfinite(value) and abs(value) <= PARAM_FLOAT_MAX
+
+
 def _number(raw: str, where: str, source: str) -> int | float:
     try:
-        return int(raw)
+        value_int = int(raw)
     except ValueError:
         pass
+    else:
+        if not check_param_value(value_int):
+            raise BadInput(
+                f"{where}: value out of range", file=source, value=raw, allowed=PARAM_VALUE_ALLOWED
+            )
+        return value_int
     try:
         value = float(raw)
     except ValueError:
@@ -58,12 +82,15 @@ def _number(raw: str, where: str, source: str) -> int | float:
             f"{where}: value is not a number", file=source, value=raw, allowed="a number"
         ) from None
     if not math.isfinite(value):
-        raise BadInput(f"{where}: value is not finite", file=source, value=raw, allowed="a finite number")
+        raise BadInput(f"{where}: value is not finite", file=source, value=raw, allowed=PARAM_VALUE_ALLOWED)
+    if not check_param_value(value):
+        raise BadInput(f"{where}: value out of range", file=source, value=raw, allowed=PARAM_VALUE_ALLOWED)
     return value
 
 
 def read_params_csv(path: Path) -> dict[str, int | float]:
     """The I/O edge of ``parse_params_csv``."""
+    check_file_size(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:

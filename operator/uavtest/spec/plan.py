@@ -16,8 +16,13 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from pydantic import ValidationError
+
 from uavtest.errors import BadInput, MissingFile
+from uavtest.spec.bounds import ALTITUDE_MAX, ALTITUDE_MIN, DURATION_MAX, MAX_DEPTH, SPEED_MAX
 from uavtest.spec.models import MISSION_ITEM_CMD, Home, MissionItem, MissionItemKind
+from uavtest.spec.validation import bad_input_from
+from uavtest.spec.yaml_io import check_file_size
 
 __all__ = ["IGNORED_COMMANDS", "parse_plan", "plan_home", "read_plan"]
 
@@ -44,6 +49,7 @@ _POSITIONAL = {
 
 def read_plan(path: Path) -> dict[str, Any]:
     """The JSON document of a ``.plan`` file (I/O edge); ``BadInput`` with line/column on bad JSON."""
+    check_file_size(path)
     try:
         text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
@@ -51,13 +57,24 @@ def read_plan(path: Path) -> dict[str, Any]:
     except (OSError, UnicodeDecodeError) as e:
         raise BadInput(f"cannot read plan file: {e}", file=str(path)) from None
     try:
-        doc = json.loads(text)
+        doc = json.loads(text, parse_constant=_refuse_constant)
+    except _NotJsonNumber as e:
+        raise BadInput(
+            f"{e.args[0]} is not a JSON number",
+            file=str(path),
+            value=e.args[0],
+            allowed="finite numbers (QGroundControl writes null for an unset value)",
+        ) from None
+    except RecursionError:
+        raise _too_deep(str(path)) from None
     except json.JSONDecodeError as e:
         raise BadInput(
             f"not valid JSON at line {e.lineno}, column {e.colno}: {e.msg}",
             file=str(path),
             allowed="a QGroundControl .plan (JSON)",
         ) from None
+    if _depth(doc) > MAX_DEPTH:
+        raise _too_deep(str(path))
     if not isinstance(doc, dict):
         raise BadInput(
             "a .plan must be a JSON object",
@@ -66,6 +83,36 @@ def read_plan(path: Path) -> dict[str, Any]:
             allowed="a QGroundControl .plan (JSON object)",
         )
     return doc
+
+
+class _NotJsonNumber(ValueError):
+    """NaN, Infinity or -Infinity in a JSON text (Python's json module accepts them)."""
+
+
+def _refuse_constant(name: str) -> Any:
+    raise _NotJsonNumber(name)
+
+
+def _too_deep(source: str) -> BadInput:
+    return BadInput(
+        "the plan is nested too deeply",
+        file=source,
+        allowed=f"at most {MAX_DEPTH} levels of nested objects and lists",
+    )
+
+
+def _depth(doc: Any) -> int:
+    """How deeply ``doc`` nests (without recursion: a parsed document may be deeper than Python's stack)."""
+    deepest = 0
+    stack: list[tuple[Any, int]] = [(doc, 1)]
+    while stack:
+        node, depth = stack.pop()
+        deepest = max(deepest, depth)
+        if deepest > MAX_DEPTH:
+            break
+        children = node.values() if isinstance(node, dict) else node if isinstance(node, list) else ()
+        stack.extend((child, depth + 1) for child in children if isinstance(child, dict | list))
+    return deepest
 
 
 def _items(doc: Mapping[str, Any], source: str) -> list[Any]:
@@ -122,13 +169,13 @@ def _plan_home(doc: Mapping[str, Any], source: str) -> Home | None:
     if not (isinstance(raw, list) and len(raw) == 3 and all(_is_number(v) for v in raw)):
         raise BadInput("bad home position", file=source, field=field, value=raw, allowed="[lat, lon, alt]")
     lat, lon, alt = (float(v) for v in raw)
-    if not (-90 <= lat <= 90 and -180 <= lon <= 180):
+    if not (-90 <= lat <= 90 and -180 <= lon <= 180 and ALTITUDE_MIN <= alt <= ALTITUDE_MAX):
         raise BadInput(
             "home position out of range",
             file=source,
             field=field,
             value=raw,
-            allowed="lat -90..90, lon -180..180",
+            allowed=f"lat -90..90, lon -180..180, alt {ALTITUDE_MIN:g}..{ALTITUDE_MAX:g} m AMSL",
         )
     return Home(lat=lat, lon=lon, alt=alt)
 
@@ -215,13 +262,13 @@ def _item(
     frame = item.get("frame", 3)
     if kind == MissionItemKind.CHANGE_SPEED:
         speed = _param(params, 1)
-        if speed is None or speed <= 0:
+        if speed is None or not 0 < speed <= SPEED_MAX:
             raise BadInput(
-                "change-speed needs a speed > 0 in params[1]",
+                f"change-speed needs a speed > 0 and <= {SPEED_MAX:g} m/s in params[1]",
                 file=source,
                 field=f"{field}.params[1]",
                 value=speed,
-                allowed="a ground speed > 0 m/s",
+                allowed=f"a ground speed > 0 and <= {SPEED_MAX:g} m/s",
             )
         return MissionItem(kind=kind, speed=speed)
     if kind == MissionItemKind.RETURN:
@@ -256,13 +303,13 @@ def _item(
     hold = 0.0
     if kind in (MissionItemKind.WAYPOINT, MissionItemKind.LOITER_TIME):
         hold = _param(params, 0) or 0.0
-        if hold < 0:
+        if not 0 <= hold <= DURATION_MAX:
             raise BadInput(
-                "hold time is negative",
+                "hold time out of range",
                 file=source,
                 field=f"{field}.params[0]",
                 value=hold,
-                allowed="seconds >= 0",
+                allowed=f"seconds >= 0 and <= {DURATION_MAX:g}",
             )
     if kind in _POSITIONAL and kind != MissionItemKind.LAND and alt is None:
         raise BadInput(
@@ -272,4 +319,15 @@ def _item(
             value=None,
             allowed="metres",
         )
-    return MissionItem(kind=kind, lat=lat, lon=lon, alt=alt, hold=hold)
+    if alt is not None and not ALTITUDE_MIN <= alt <= ALTITUDE_MAX:
+        raise BadInput(
+            "altitude out of range",
+            file=source,
+            field=f"{field}.params[6]",
+            value=alt,
+            allowed=f"metres above home >= {ALTITUDE_MIN:g} and <= {ALTITUDE_MAX:g}",
+        )
+    try:
+        return MissionItem(kind=kind, lat=lat, lon=lon, alt=alt, hold=hold)
+    except ValidationError as e:  # a safety net: the checks above name the params index
+        raise bad_input_from(e, source=source, root=MissionItem, prefix=field) from None

@@ -16,6 +16,7 @@ from pydantic import BaseModel, ValidationError
 from pydantic_core import ErrorDetails
 
 from uavtest.errors import BadInput
+from uavtest.spec.bounds import PARAM_FLOAT_MAX, PARAM_INT_MAX, PARAM_INT_MIN
 
 __all__ = ["bad_input_from", "model_fields_of"]
 
@@ -39,25 +40,40 @@ def _union_members(tp: Any) -> list[Any] | None:
     return None
 
 
-def _tag_of(tp: Any) -> str:
-    return getattr(_unwrap(tp), "__name__", str(tp))
+def _tags_of(tp: Any) -> tuple[str, ...]:
+    """The tags pydantic gives a union member in error locations (``float``, ``constrained-float``)."""
+    name = getattr(_unwrap(tp), "__name__", str(tp))
+    return (name, f"constrained-{name}")
 
 
-def _walk(root: type[BaseModel], loc: tuple[int | str, ...]) -> tuple[str, type[BaseModel] | None]:
-    """The display path of ``loc`` and the model class the last step is a field of (if any)."""
+def _metadata_of(tp: Any) -> tuple[Any, list[Any]]:
+    """``tp`` without its Annotated layers, and the constraints those layers carried."""
+    found: list[Any] = []
+    while typing.get_origin(tp) is typing.Annotated:
+        tp, *extras = typing.get_args(tp)
+        for extra in extras:
+            found.extend(getattr(extra, "metadata", None) or [extra])
+    return tp, found
+
+
+def _walk(root: type[BaseModel], loc: tuple[int | str, ...]) -> tuple[str, type[BaseModel] | None, list[Any]]:
+    """The display path of ``loc``, the model class the last step is a field of (if any) and the
+    constraints (``Ge``, ``Le``, ...) of the value at ``loc``."""
     parts: list[str] = []
     tp: Any = root
     parent: type[BaseModel] | None = None
     items = list(loc)
+    constraints: list[Any] = []
     while items:
-        tp = _unwrap(tp)
+        tp, found = _metadata_of(tp)
+        constraints.extend(found)
         members = _union_members(tp)
         if members is not None:
             if len(members) == 1:
                 tp = members[0]
                 continue
             tag = items[0]
-            chosen = next((m for m in members if _tag_of(m) == tag), None)
+            chosen = next((m for m in members if tag in _tags_of(m)), None)
             if chosen is not None:
                 items.pop(0)
                 tp = chosen
@@ -65,6 +81,7 @@ def _walk(root: type[BaseModel], loc: tuple[int | str, ...]) -> tuple[str, type[
                 tp = members[0]
             continue
         item = items.pop(0)
+        constraints = []
         if isinstance(tp, type) and issubclass(tp, BaseModel):
             parent = tp
             field_name, info = next(
@@ -72,6 +89,7 @@ def _walk(root: type[BaseModel], loc: tuple[int | str, ...]) -> tuple[str, type[
             )
             parts.append(f".{info.alias or field_name}" if info is not None else f".{item}")
             tp = info.annotation if info is not None else Any
+            constraints = list(info.metadata) if info is not None else []
             continue
         origin = typing.get_origin(tp)
         args = typing.get_args(tp)
@@ -87,7 +105,15 @@ def _walk(root: type[BaseModel], loc: tuple[int | str, ...]) -> tuple[str, type[
         else:
             parts.append(f"[{item}]" if isinstance(item, int) else f".{item}")
             tp = Any
-    return "".join(parts).lstrip("."), parent
+    # the leaf: its own Annotated layers, through an optional (X | None) to the one member
+    while True:
+        tp, found = _metadata_of(tp)
+        constraints.extend(found)
+        members = _union_members(tp)
+        if members is None or len(members) != 1:
+            break
+        tp = members[0]
+    return "".join(parts).lstrip("."), parent, constraints
 
 
 def _field_model(root: type[BaseModel], loc: tuple[int | str, ...]) -> type[BaseModel] | None:
@@ -127,7 +153,7 @@ def _short(value: Any) -> Any:
 def _describe(err: ErrorDetails, root: type[BaseModel]) -> tuple[str, str, Any, str | None]:
     """(field path, message, value, allowed) of one pydantic error."""
     loc = tuple(err["loc"])
-    path, parent = _walk(root, loc)
+    path, parent, constraints = _walk(root, loc)
     kind = err["type"]
     ctx: dict[str, Any] = dict(err.get("ctx") or {})
     value: Any = err.get("input")
@@ -144,9 +170,12 @@ def _describe(err: ErrorDetails, root: type[BaseModel]) -> tuple[str, str, Any, 
         msg = "value not allowed"
     elif kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
         msg = "value out of range"
-        allowed = _range_text(_field_model(root, loc[:-1]), str(loc[-1]), kind, ctx)
-    elif kind in ("float_type", "float_parsing", "finite_number"):
-        allowed, msg = "a number", "not a number"
+        allowed = _range_text(constraints, {_KIND_KEY[kind]: next(iter(ctx.values()))})
+    elif kind == "finite_number":
+        msg = "not a finite number (NaN and infinity are not allowed)"
+        allowed = _range_text(constraints, {})
+    elif kind in ("float_type", "float_parsing"):
+        allowed, msg = _range_text(constraints, {}), "not a number"
     elif kind in ("int_type", "int_parsing", "int_from_float", "int_parsing_size"):
         allowed, msg = "an integer", "not an integer"
     elif kind in ("bool_type", "bool_parsing"):
@@ -178,22 +207,22 @@ def _describe(err: ErrorDetails, root: type[BaseModel]) -> tuple[str, str, Any, 
     return path, msg, _short(value) if value is not None else None, allowed
 
 
+_PARAM_VALUE = (
+    f"a finite number: an integer from {PARAM_INT_MIN} to {PARAM_INT_MAX} (PX4 INT32) "
+    f"or a decimal within ±{PARAM_FLOAT_MAX:.1e} (PX4 FLOAT)"
+)
 _SIGNS = {"gt": ">", "ge": ">=", "lt": "<", "le": "<="}
 _KIND_KEY = {"greater_than": "gt", "greater_than_equal": "ge", "less_than": "lt", "less_than_equal": "le"}
 
 
-def _range_text(model: type[BaseModel] | None, field: str, kind: str, ctx: dict[str, Any]) -> str:
-    """'a number > 0', or both bounds when the field has two ('a number >= -1 and <= 1')."""
-    bounds: dict[str, Any] = {_KIND_KEY[kind]: next(iter(ctx.values()))}
-    info = None
-    if model is not None:
-        info = next((f for n, f in model.model_fields.items() if field in (n, f.alias)), None)
-    for m in info.metadata if info is not None else []:
+def _range_text(constraints: list[Any], bounds: dict[str, Any]) -> str:
+    """'a number > 0', or both bounds when the value has two ('a number >= -1 and <= 1')."""
+    for m in constraints:
         for key in _SIGNS:
             if getattr(m, key, None) is not None:
-                bounds[key] = getattr(m, key)
+                bounds.setdefault(key, getattr(m, key))
     parts = [f"{_SIGNS[k]} {bounds[k]:g}" for k in ("gt", "ge", "lt", "le") if k in bounds]
-    return "a number " + " and ".join(parts)
+    return " and ".join(["a number", *parts]).replace("a number and", "a number", 1)
 
 
 def bad_input_from(
@@ -215,6 +244,12 @@ def bad_input_from(
             continue
         # a union (int | float, model | None) reports one problem once per member: merge them
         _, first_msg, first_value, first_allowed = described[same]
+        if "params." in full and (first_allowed or "").startswith(("a number", "an integer")):
+            # a PX4 parameter (int | float): say what PX4 takes, with the float member's message
+            message = msg if first_msg == "not an integer" else first_msg
+            message = "not a number" if message == "not an integer" else message
+            described[same] = (full, message, first_value, _PARAM_VALUE)
+            continue
         options = {a for a in (first_allowed, allowed) if a}
         merged = "a number" if options == {"an integer", "a number"} else " or ".join(sorted(options))
         described[same] = (full, "not a number" if merged == "a number" else first_msg, first_value, merged)

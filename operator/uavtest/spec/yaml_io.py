@@ -5,17 +5,55 @@ YAML is only ever written from plain dicts with ``yaml.safe_dump`` (never format
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import yaml
 
 from uavtest.errors import BadInput
+from uavtest.spec.bounds import MAX_DEPTH, MAX_FILE_BYTES, MAX_NODES
 
-__all__ = ["dump_yaml", "parse_yaml"]
+__all__ = ["check_file_size", "dump_yaml", "parse_yaml"]
+
+
+class _TooDeep(yaml.composer.ComposerError):
+    """A document nested deeper than ``MAX_DEPTH``."""
 
 
 class _StrictLoader(yaml.SafeLoader):
-    """SafeLoader that refuses a key given twice in one mapping (PyYAML keeps the last silently)."""
+    """SafeLoader that refuses a key given twice in one mapping (PyYAML keeps the last silently)
+    and a document nested deeper than ``MAX_DEPTH`` (PyYAML would recurse until RecursionError)."""
+
+    _depth = 0
+
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node | None:
+        self._depth += 1
+        try:
+            if self._depth > MAX_DEPTH:
+                mark = self.peek_event().start_mark  # type: ignore[no-untyped-call]
+                raise _TooDeep(None, None, "nested too deeply", mark)
+            return super().compose_node(parent, index)  # type: ignore[no-untyped-call,no-any-return]
+        finally:
+            self._depth -= 1
+
+
+def _expanded_size(root: yaml.Node) -> int:
+    """How many values the document has once aliases are expanded (a 'billion laughs' is huge)."""
+    sizes: dict[int, int] = {}
+
+    def size(node: yaml.Node) -> int:  # depth is bounded by MAX_DEPTH: recursion is safe
+        known = sizes.get(id(node))
+        if known is not None:
+            return known
+        total = 1
+        if isinstance(node, yaml.SequenceNode):
+            total += sum(size(child) for child in node.value)
+        elif isinstance(node, yaml.MappingNode):
+            total += sum(size(k) + size(v) for k, v in node.value)
+        sizes[id(node)] = min(total, MAX_NODES + 1)
+        return sizes[id(node)]
+
+    return size(root)
 
 
 def _construct_mapping(loader: _StrictLoader, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
@@ -36,10 +74,57 @@ def _construct_mapping(loader: _StrictLoader, node: yaml.MappingNode, deep: bool
 _StrictLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
 
 
+def check_file_size(path: Path) -> None:
+    """``BadInput`` for an input file larger than ``MAX_FILE_BYTES`` (before reading it whole)."""
+    try:
+        size = path.stat().st_size
+    except OSError:
+        return  # reading it reports what is wrong
+    if size > MAX_FILE_BYTES:
+        raise BadInput(
+            "the file is too large",
+            file=str(path),
+            value=f"{size} bytes",
+            allowed=f"at most {MAX_FILE_BYTES // (1024 * 1024)} MiB",
+        )
+
+
 def parse_yaml(text: str, source: str) -> Any:
     """The one YAML document in ``text``; ``BadInput`` with source, line and column on a syntax error."""
+    size = len(text.encode("utf-8", errors="replace"))
+    if size > MAX_FILE_BYTES:
+        raise BadInput(
+            "the file is too large",
+            file=source,
+            value=f"{size} bytes",
+            allowed=f"at most {MAX_FILE_BYTES // (1024 * 1024)} MiB",
+        )
+    loader = _StrictLoader(text)  # a SafeLoader subclass: no arbitrary objects
     try:
-        return yaml.load(text, Loader=_StrictLoader)  # a SafeLoader subclass: no arbitrary objects
+        node = loader.get_single_node()  # type: ignore[no-untyped-call]
+        if node is None:
+            return None
+        if _expanded_size(node) > MAX_NODES:
+            raise BadInput(
+                "the document is too large once its aliases (*name) are expanded",
+                file=source,
+                allowed=f"at most {MAX_NODES} values",
+            )
+        return loader.construct_document(node)  # type: ignore[no-untyped-call]
+    except RecursionError:
+        raise BadInput(
+            "the document is nested too deeply",
+            file=source,
+            allowed=f"at most {MAX_DEPTH} levels of nested mappings and lists",
+        ) from None
+    except _TooDeep as e:
+        mark = e.problem_mark
+        where = f" (at line {mark.line + 1}, column {mark.column + 1})" if mark is not None else ""
+        raise BadInput(
+            f"the document is nested too deeply{where}",
+            file=source,
+            allowed=f"at most {MAX_DEPTH} levels of nested mappings and lists",
+        ) from None
     except yaml.MarkedYAMLError as e:
         mark = e.problem_mark or e.context_mark
         where = f"line {mark.line + 1}, column {mark.column + 1}" if mark is not None else "unknown place"
@@ -48,6 +133,8 @@ def parse_yaml(text: str, source: str) -> Any:
         raise BadInput(f"YAML syntax error at {where}: {problem}{context}", file=source) from None
     except yaml.YAMLError as e:
         raise BadInput(f"YAML syntax error: {e}", file=source) from None
+    finally:
+        loader.dispose()  # type: ignore[no-untyped-call]
 
 
 class _Dumper(yaml.SafeDumper):
