@@ -40,8 +40,8 @@ class Px4Param:
     def allowed(self) -> str:
         """'an integer in [0, 4]', 'one of 0, 1, 2', 'a number in [0.05, 200]'."""
         kind = "an integer" if self.is_int else "a number"
-        if self.values:
-            return f"{kind}, one of {', '.join(str(v) for v in self.values)}"
+        if self.values and self.min is not None and self.max is not None:
+            return f"{kind} in [{self.min:g}, {self.max:g}] ({', '.join(str(v) for v in self.values)})"
         if self.min is not None and self.max is not None:
             return f"{kind} in [{self.min:g}, {self.max:g}]"
         if self.min is not None:
@@ -77,8 +77,11 @@ def suggest(name: str, n: int = 3) -> list[str]:
 def check_value(name: str, value: int | float) -> str | None:
     """Why PX4 v1.15 would not take ``value`` for ``name`` (None when fine or unknown name).
 
-    A float with a fraction for an INT32 parameter, a non-finite number, a value outside
-    [min, max] or not among an enum's values.
+    A float with a fraction for an INT32 parameter, a non-finite number, a value outside PX4's
+    documented [min, max]. This is stricter than the firmware: PX4 v1.15 stores any value a
+    PARAM_SET brings (the SIH square-mission flight set NAV_RCL_ACT 0, below its min 1), but a
+    value outside the documented range is a test-file mistake QGroundControl refuses too. An
+    enum's documented values are not enforced beyond min / max.
     """
     p = lookup(name)
     if p is None:
@@ -89,8 +92,6 @@ def check_value(name: str, value: int | float) -> str | None:
         return "not a finite number"
     if p.is_int and isinstance(value, float) and not value.is_integer():
         return "not an integer (the parameter is INT32)"
-    if p.values and int(value) not in p.values and not (isinstance(value, float) and not value.is_integer()):
-        return "value not allowed"
     if (p.min is not None and value < p.min) or (p.max is not None and value > p.max):
         return "value out of range"
     return None

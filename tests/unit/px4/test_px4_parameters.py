@@ -62,7 +62,9 @@ def test_sih_values_where_logs_disagree_come_from_the_real_time_logs() -> None:
         ("NAV_RCL_ACT", 3, None),
         ("NAV_RCL_ACT", 3.0, None),
         ("NAV_RCL_ACT", 2.5, "not an integer (the parameter is INT32)"),
-        ("MPC_YAW_MODE", 7, "value not allowed"),
+        ("MPC_YAW_MODE", 7, "value out of range"),
+        ("NAV_RCL_ACT", 0, "value out of range"),  # documented 1..6 (PX4 itself would store it)
+        ("COM_LOW_BAT_ACT", 1, None),  # not among the documented 0, 2, 3 but no min / max
         ("MIS_TAKEOFF_ALT", float("nan"), "not a finite number"),
         ("NO_SUCH_PARAM", 1, None),
     ],
