@@ -161,7 +161,7 @@ class ParamStore:
         return iter(self._values)
 
     def __getitem__(self, name: str) -> float:
-        """The value of ``name``; a PX4 v1.15 parameter not stored yet is stored first (KeyError if unknown)."""
+        """The value of ``name``; a PX4 v1.15 parameter not stored yet is stored first (else KeyError)."""
         if name not in self._values and not self.ensure(name):
             raise KeyError(name)
         return self._values[name]
