@@ -57,6 +57,10 @@ def test_competition_mission_runs_directly_with_a_notice(shared_data: Path, tmp_
     assert "asks for the 'ros' simulator" in out.stderr
     assert out.code == 0, out.stderr[-3000:]
     assert out.summary is not None and out.summary["passed"] == 2
+    # its mission-params.csv sets SDLOG_PROFILE, a PX4 parameter the built-in vehicle ignores
+    assert "no effect in the built-in simulator: SDLOG_PROFILE" in " ".join(out.stderr.split())
+    assert out.summary["unmodelled_params"] == ["SDLOG_PROFILE"]
+    assert all(r["unmodelled_params"] == ["SDLOG_PROFILE"] for r in out.summary["results"])
 
 
 def test_bad_input_exits_2_before_flying(repo_root: Path, tmp_path: Path) -> None:

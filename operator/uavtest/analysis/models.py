@@ -83,6 +83,10 @@ class ReplicaResult(_Result):
     sim_time: float | None = Field(None, description="vehicle seconds flown")
     wall_time: float | None = Field(None, description="wall-clock seconds the replica took")
     attempts: int = Field(1, ge=1, description="1 + retries after bench errors")
+    unmodelled_params: list[str] = Field(
+        default_factory=list,
+        description="PX4 parameters the test sets that have no effect in the built-in simulator",
+    )
 
 
 class Stats(_Result):
@@ -110,3 +114,7 @@ class RunSummary(_Result):
     min_obstacle_distance: Stats | None = None
     flight_time: Stats | None = None
     results: list[ReplicaResult] = Field(default_factory=list)
+    unmodelled_params: list[str] = Field(
+        default_factory=list,
+        description="PX4 parameters the test sets that have no effect in the built-in simulator",
+    )

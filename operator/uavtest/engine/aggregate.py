@@ -14,6 +14,7 @@ from uavtest.analysis.models import ReplicaResult, RunSummary, Verdict
 from uavtest.analysis.trajectory import Trajectory
 from uavtest.errors import UavTestError
 from uavtest.spec.models import UavTestSpec
+from uavtest.spec.px4_params import unmodelled_params
 from uavtest.store import ArtifactStore
 from uavtest.store.layout import aggregate_key, replica_key
 
@@ -88,6 +89,7 @@ def aggregate_run(
         if trajectory is not None and len(trajectory) >= 2 and trajectory.duration > 0:
             trajectories.append(trajectory)
     summary = summarize(results, test=test, namespace=namespace, run_id=run_id)
+    summary = summary.model_copy(update={"unmodelled_params": unmodelled_params(spec)})
     if trajectories:
         average = average_trajectories(trajectories)
         store.put(

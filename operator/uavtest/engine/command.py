@@ -21,7 +21,7 @@ def run_command(
 ) -> int:
     """Run a test locally and report it; returns the exit code (see ``uavtest.engine.outcome``)."""
     from uavtest.engine.local import RunOptions, run_local
-    from uavtest.engine.outcome import exit_code, results_table, summary_line
+    from uavtest.engine.outcome import exit_code, results_table, summary_line, unmodelled_line
 
     err = Console(stderr=True)
     options = RunOptions(test=test, replicas=replicas, jobs=jobs, out=out, seed=seed, replica=replica)
@@ -33,6 +33,9 @@ def run_command(
         stdout = Console(soft_wrap=True)
         stdout.print(results_table(summary))
         stdout.print(summary_line(summary), highlight=False)
+        warning = unmodelled_line(summary)
+        if warning:
+            stdout.print(warning, highlight=False)
         stdout.print(f"summary: {run.summary_path}", highlight=False)
         if run.plot_path is not None:
             stdout.print(f"plot:    {run.plot_path}", highlight=False)

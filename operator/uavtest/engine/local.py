@@ -30,6 +30,7 @@ from uavtest.engine.ports import PX4_MAX_INSTANCES, PortAllocator
 from uavtest.engine.replica import DEFAULT_RETRIES, ReplicaJob, run_replica
 from uavtest.errors import BadInput
 from uavtest.spec.models import Simulator, UavTest
+from uavtest.spec.px4_params import unmodelled_notice, unmodelled_params
 from uavtest.store import ArtifactStore
 from uavtest.store.layout import aggregate_key, replica_prefix, run_prefix
 
@@ -261,7 +262,11 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     console = console or Console(stderr=True)
     settings = EngineSettings()
     test = load_test(options.test)
-    notices = [n for n in [aerialist_simulator_notice(options.test)] if n]
+    notices = [
+        n
+        for n in [aerialist_simulator_notice(options.test), unmodelled_notice(unmodelled_params(test.spec))]
+        if n
+    ]
     for n in notices:
         console.print(f"[cyan]notice:[/] {n}", highlight=False)
     px4_bin = _px4_bin(test, settings, options.test)

@@ -15,7 +15,7 @@ from rich.table import Table
 from uavtest.analysis.models import ReplicaResult, RunSummary, Stats, Verdict
 from uavtest.errors import ExitCode
 
-__all__ = ["exit_code", "results_table", "summary_line"]
+__all__ = ["exit_code", "results_table", "summary_line", "unmodelled_line"]
 
 _STYLE = {Verdict.PASS: "green", Verdict.FAIL: "red", Verdict.ERROR: "yellow"}
 
@@ -81,3 +81,11 @@ def summary_line(summary: RunSummary) -> str:
         f"flakiness {flakiness} · flaky {'yes' if summary.flaky else 'no'}"
         + _stats("min distance", summary.min_obstacle_distance, "m")
     )
+
+
+def unmodelled_line(summary: RunSummary) -> str | None:
+    """A warning naming the test's PX4 parameters the built-in simulator ignores (None if none)."""
+    from uavtest.spec.px4_params import unmodelled_notice
+
+    notice = unmodelled_notice(summary.unmodelled_params)
+    return f"warning: {notice}" if notice else None

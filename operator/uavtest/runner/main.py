@@ -146,6 +146,7 @@ def run_replica(opts: RunnerOptions, *, store: ArtifactStore | None = None) -> t
     Raises BadInput before anything flies when the test file or the options are wrong.
     """
     from uavtest.spec.loaders import load_test
+    from uavtest.spec.px4_params import unmodelled_notice, unmodelled_params
 
     wall0 = time.monotonic()
     since = time.time() - 1.0
@@ -178,8 +179,15 @@ def run_replica(opts: RunnerOptions, *, store: ArtifactStore | None = None) -> t
     log_bytes = log_path.read_bytes() if log_path is not None else None
     if log_path is not None and report.log_data is not None:
         log_path.unlink(missing_ok=True)
+    unmodelled = unmodelled_params(spec)
+    if unmodelled:
+        log.warning("%s", unmodelled_notice(unmodelled))
     result, stored = store_artifacts(
-        store, place, analysis.result, log_bytes=log_bytes, trajectory=analysis.trajectory
+        store,
+        place,
+        analysis.result.model_copy(update={"unmodelled_params": unmodelled}),
+        log_bytes=log_bytes,
+        trajectory=analysis.trajectory,
     )
     return result, stored
 

@@ -4,8 +4,9 @@ PX4 sends and takes integer parameters *byte-wise* inside PARAM_VALUE/PARAM_SET'
 the float's four bytes are the int32's bytes. Which parameters are integers the vehicle says:
 the runner first reads each parameter (PARAM_REQUEST_READ) and encodes by the ``param_type`` of
 the answer. A parameter the vehicle does not know (no answer) is set with the type of the value
-given (an ``int`` → INT32, a ``float`` → REAL32) and still verified by its echo: PX4 refuses
-unknown parameters (then the stage fails naming it), the built-in simulator stores them.
+given (an ``int`` → INT32, a ``float`` → REAL32) and still verified by its echo: PX4 v1.15 and
+the built-in simulator answer an unknown name with silence, and the stage fails with
+"PX4 did not accept parameter NAME (unknown to this firmware?)".
 """
 
 from __future__ import annotations
@@ -93,6 +94,7 @@ class ParamSetter:
         self._phase = _Phase.READ
         self._tries = 0
         self._deadline = math.inf
+        self.answered_read = False  # the current parameter's read was answered (the vehicle has it)
 
     @property
     def deadline(self) -> float:
@@ -108,6 +110,7 @@ class ParamSetter:
             return []
         self._name, self._value = self._todo.pop(0)
         self._phase = _Phase.READ
+        self.answered_read = False
         self._tries = 1
         self._deadline = wall + self.retry_s
         return [ParamRequestRead(self._name)]
@@ -135,6 +138,7 @@ class ParamSetter:
             except ValueError:
                 return self._fail(f"parameter {self._name}: unknown MAV_PARAM_TYPE {msg.param_type}")
             self._phase = _Phase.SET
+            self.answered_read = True
             self._tries = 1
             return self._send_set(wall)
         got = decode_param(msg.value, msg.param_type)
@@ -166,6 +170,11 @@ class ParamSetter:
                 self._phase = _Phase.SET
                 self._tries = 1
                 return self._send_set(wall)
+            if not self.answered_read:
+                return self._fail(
+                    f"PX4 did not accept parameter {self._name} (unknown to this firmware?): "
+                    f"no answer to {self.attempts} reads and {self._tries} PARAM_SETs"
+                )
             return self._fail(f"parameter {self._name}: no PARAM_VALUE after {self._tries} PARAM_SETs")
         self._tries += 1
         log.warning("param %s: no answer; retry %d of %d", self._name, self._tries, self.attempts)

@@ -1,8 +1,10 @@
 """PX4 parameters: the defaults that govern the simulated vehicle, and the parameter store.
 
 Defaults and types are PX4 v1.15 SITL's (``sihsim_quadx``) as its logs show them, e.g.
-``NAV_ACC_RAD`` 2.0 (the airframe's value; the PX4-wide default is 10). Unknown names are
-stored and echoed like PX4 does for any parameter it has. PX4 sends INT32 values packed
+``NAV_ACC_RAD`` 2.0 (the airframe's value; the PX4-wide default is 10); a unit test checks them
+against the SIH logs. ``DEFAULTS`` is also the list of what the vehicle *models*. Other PX4 v1.15
+parameters (``uavtest.px4.parameters``) are stored and echoed like PX4 does, without effect;
+names PX4 v1.15 does not have are refused (``known`` is False). PX4 sends INT32 values packed
 byte-wise into PARAM_VALUE's float field (``MAV_PROTOCOL_CAPABILITY_PARAM_ENCODE_BYTEWISE``).
 """
 
@@ -12,13 +14,16 @@ import math
 import struct
 from collections.abc import Iterator, Mapping
 
+from uavtest.px4 import parameters as px4_parameters
 from uavtest.sitl.mav import ParamType
 
-__all__ = ["DEFAULTS", "ParamStore", "decode_param_value", "encode_param_value"]
+__all__ = ["DEFAULTS", "UNMODELLED_AT_BOOT", "ParamStore", "decode_param_value", "encode_param_value"]
 
 INT, FLOAT = ParamType.INT32, ParamType.REAL32
 
-#: name → (type, default)
+#: name → (type, default): the parameters the simulated vehicle *models* (some code here reads
+#: each; a unit test checks that both ways against the sitl sources, and the values against the
+#: PX4 v1.15 SIH logs). Every other PX4 v1.15 parameter is stored and echoed without effect.
 DEFAULTS: dict[str, tuple[ParamType, float]] = {
     # commander
     "COM_DISARM_LAND": (FLOAT, 2.0),
@@ -26,43 +31,27 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "COM_SPOOLUP_TIME": (FLOAT, 1.0),
     "COM_DL_LOSS_T": (INT, 10),
     "COM_RC_LOSS_T": (FLOAT, 0.5),
-    "COM_RC_IN_MODE": (INT, 1),
-    "COM_ARM_WO_GPS": (INT, 1),
-    "COM_HOME_EN": (INT, 1),
-    "COM_OBL_RC_ACT": (INT, 0),
-    "COM_FLTMODE1": (INT, -1),
-    "COM_LOW_BAT_ACT": (INT, 2),
     # navigator / mission
     "NAV_ACC_RAD": (FLOAT, 2.0),
     "NAV_MC_ALT_RAD": (FLOAT, 0.8),
     "NAV_DLL_ACT": (INT, 0),
     "NAV_RCL_ACT": (INT, 2),
-    "NAV_LOITER_RAD": (FLOAT, 80.0),
-    "NAV_TRAFF_AVOID": (INT, 1),
     "MIS_TAKEOFF_ALT": (FLOAT, 2.5),
     "MIS_YAW_ERR": (FLOAT, 12.0),
     "MIS_YAW_TMT": (FLOAT, -1.0),
-    "MIS_DIST_1WP": (FLOAT, 900.0),
     "RTL_RETURN_ALT": (FLOAT, 30.0),
     "RTL_DESCEND_ALT": (FLOAT, 10.0),
     "RTL_LAND_DELAY": (FLOAT, 0.0),
     "RTL_MIN_DIST": (FLOAT, 10.0),
-    "RTL_TYPE": (INT, 0),
-    "GF_ACTION": (INT, 2),
-    "GF_MAX_HOR_DIST": (FLOAT, 0.0),
-    "GF_MAX_VER_DIST": (FLOAT, 0.0),
     # multicopter position control
     "MPC_YAW_MODE": (INT, 0),
     "MPC_XY_CRUISE": (FLOAT, 5.0),
     "MPC_XY_VEL_MAX": (FLOAT, 12.0),
     "MPC_VEL_MANUAL": (FLOAT, 10.0),
     "MPC_ACC_HOR": (FLOAT, 3.0),
-    "MPC_ACC_HOR_MAX": (FLOAT, 5.0),
     "MPC_JERK_AUTO": (FLOAT, 4.0),
     "MPC_Z_V_AUTO_UP": (FLOAT, 3.0),
     "MPC_Z_V_AUTO_DN": (FLOAT, 1.5),
-    "MPC_Z_VEL_MAX_UP": (FLOAT, 3.0),
-    "MPC_Z_VEL_MAX_DN": (FLOAT, 1.5),
     "MPC_TKO_SPEED": (FLOAT, 1.5),
     "MPC_TKO_RAMP_T": (FLOAT, 3.0),
     "MPC_LAND_SPEED": (FLOAT, 0.7),
@@ -71,41 +60,62 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "MPC_LAND_ALT3": (FLOAT, 1.0),
     "MPC_LAND_CRWL": (FLOAT, 0.3),
     "MPC_TILTMAX_AIR": (FLOAT, 45.0),
-    "MPC_TILTMAX_LND": (FLOAT, 12.0),
     "MPC_MAN_TILT_MAX": (FLOAT, 35.0),
     "MPC_MAN_Y_MAX": (FLOAT, 150.0),
     "MPC_XY_P": (FLOAT, 0.95),
     "MPC_Z_P": (FLOAT, 1.0),
     "MPC_XY_VEL_P_ACC": (FLOAT, 1.8),
     "MPC_XY_VEL_I_ACC": (FLOAT, 0.4),
-    "MPC_XY_VEL_D_ACC": (FLOAT, 0.2),
     "MPC_Z_VEL_P_ACC": (FLOAT, 4.0),
     "MPC_Z_VEL_I_ACC": (FLOAT, 2.0),
     "MPC_ACC_UP_MAX": (FLOAT, 4.0),
     "MPC_ACC_DOWN_MAX": (FLOAT, 3.0),
     "MPC_YAWRAUTO_MAX": (FLOAT, 45.0),
     "MPC_YAWRAUTO_ACC": (FLOAT, 60.0),
-    "MPC_THR_HOVER": (FLOAT, 0.5),
     "MPC_XY_ERR_MAX": (FLOAT, 2.0),
-    "MPC_XY_TRAJ_P": (FLOAT, 0.5),
     "MPC_HOLD_DZ": (FLOAT, 0.1),
-    "MPC_POS_MODE": (INT, 4),
-    "MPC_ALT_MODE": (INT, 2),
-    "MC_YAWRATE_MAX": (FLOAT, 200.0),
     # land detector
     "LNDMC_TRIG_TIME": (FLOAT, 1.0),
     "LNDMC_Z_VEL_MAX": (FLOAT, 0.25),
-    "LNDMC_XY_VEL_MAX": (FLOAT, 1.5),
-    # system
-    "MAV_SYS_ID": (INT, 1),
-    "MAV_COMP_ID": (INT, 1),
-    "MAV_TYPE": (INT, 2),
-    "SYS_AUTOSTART": (INT, 10040),
-    "SDLOG_MODE": (INT, 0),
-    "SDLOG_PROFILE": (INT, 1),
-    "EKF2_HGT_REF": (INT, 1),
-    "BAT1_N_CELLS": (INT, 4),
 }
+
+
+#: PX4 v1.15 SIH parameters held from boot (listed by PARAM_REQUEST_LIST, logged in the ULog's
+#: parameter section) that have no effect in the simulator; values from the PX4 table (SIH value).
+UNMODELLED_AT_BOOT: tuple[str, ...] = (
+    "COM_RC_IN_MODE",
+    "COM_ARM_WO_GPS",
+    "COM_HOME_EN",
+    "COM_OBL_RC_ACT",
+    "COM_FLTMODE1",
+    "COM_LOW_BAT_ACT",
+    "NAV_LOITER_RAD",
+    "NAV_TRAFF_AVOID",
+    "MIS_DIST_1WP",
+    "RTL_TYPE",
+    "GF_ACTION",
+    "GF_MAX_HOR_DIST",
+    "GF_MAX_VER_DIST",
+    "MPC_ACC_HOR_MAX",
+    "MPC_Z_VEL_MAX_UP",
+    "MPC_Z_VEL_MAX_DN",
+    "MPC_TILTMAX_LND",
+    "MPC_XY_VEL_D_ACC",
+    "MPC_THR_HOVER",
+    "MPC_XY_TRAJ_P",
+    "MPC_POS_MODE",
+    "MPC_ALT_MODE",
+    "MC_YAWRATE_MAX",
+    "LNDMC_XY_VEL_MAX",
+    "MAV_SYS_ID",
+    "MAV_COMP_ID",
+    "MAV_TYPE",
+    "SYS_AUTOSTART",
+    "SDLOG_MODE",
+    "SDLOG_PROFILE",
+    "EKF2_HGT_REF",
+    "BAT1_N_CELLS",
+)
 
 
 def encode_param_value(value: float, ptype: ParamType) -> float:
@@ -136,6 +146,8 @@ class ParamStore:
         for name, (ptype, default) in DEFAULTS.items():
             self._types[name] = ptype
             self._values[name] = int(default) if ptype == ParamType.INT32 else _f32(default)
+        for name in UNMODELLED_AT_BOOT:
+            self.ensure(name)
         for name, value in (overrides or {}).items():
             self.set(name, value)
 
@@ -149,7 +161,24 @@ class ParamStore:
         return iter(self._values)
 
     def __getitem__(self, name: str) -> float:
+        """The value of ``name``; a PX4 v1.15 parameter not stored yet is stored first (else KeyError)."""
+        if name not in self._values and not self.ensure(name):
+            raise KeyError(name)
         return self._values[name]
+
+    def known(self, name: str) -> bool:
+        """Whether the vehicle has ``name``: stored, or a parameter PX4 v1.15 defines."""
+        return name in self._values or px4_parameters.known(name)
+
+    def ensure(self, name: str) -> bool:
+        """Store a PX4 v1.15 parameter not stored yet with its SIH value (or PX4 default)."""
+        if name in self._values:
+            return True
+        p = px4_parameters.lookup(name)
+        if p is None:
+            return False
+        self.set(name, p.vehicle_default, ParamType.INT32 if p.is_int else ParamType.REAL32)
+        return True
 
     def type_of(self, name: str) -> ParamType:
         return self._types[name]
@@ -164,7 +193,10 @@ class ParamStore:
     def set(self, name: str, value: int | float, ptype: ParamType | int | None = None) -> float:
         """Store a value (a new name takes ``ptype``, or INT32 for Python ints); returns what is stored."""
         if name not in self._types:
-            if ptype is None:
+            p = px4_parameters.lookup(name)
+            if p is not None:  # PX4 keeps its own type whatever the sender says
+                ptype = ParamType.INT32 if p.is_int else ParamType.REAL32
+            elif ptype is None:
                 ptype = ParamType.INT32 if isinstance(value, int) else ParamType.REAL32
             self._types[name] = ParamType.INT32 if int(ptype) == ParamType.INT32 else ParamType.REAL32
         if self._types[name] == ParamType.INT32:

@@ -1,8 +1,12 @@
 """The parameter and mission micro-protocols, as PX4 answers them (pure: messages in, out).
 
 Parameters: PARAM_REQUEST_LIST → every PARAM_VALUE; PARAM_REQUEST_READ (by name or index)
-→ PARAM_VALUE (nothing for an unknown name, like PX4); PARAM_SET → store (unknown names are
-created with the given type) and echo PARAM_VALUE. INT32 values travel byte-wise in the float.
+→ PARAM_VALUE; PARAM_SET → store and echo PARAM_VALUE. INT32 values travel byte-wise in the float.
+A PX4 v1.15 parameter the vehicle does not model is stored (first read or set) and echoed like
+any other. A name PX4 v1.15 does not have gets no answer at all, as PX4 v1.15 does
+(src/modules/mavlink/mavlink_parameters.cpp, release/1.15: PARAM_SET of an unknown name only
+logs ``PX4_ERR("unknown param: %s")`` on the console — no PARAM_VALUE, no STATUSTEXT, and v1.15
+has no PARAM_ERROR; PARAM_REQUEST_READ of one calls send_param(PARAM_INVALID), which sends nothing).
 
 Missions (MISSION_ITEM_INT, mission_type 0): upload MISSION_COUNT → MISSION_REQUEST_INT* →
 MISSION_ACK; download MISSION_REQUEST_LIST → MISSION_COUNT, MISSION_REQUEST_INT → MISSION_ITEM_INT;
@@ -55,11 +59,11 @@ class ParamProtocol:
                 if found is None:
                     return []
                 name = found
-            return [self.value(name)] if name in self.params else []
+            return [self.value(name)] if self.params.ensure(name) else []
         if msg.name == "PARAM_SET":
             name = str(msg.get("param_id", "")).rstrip("\x00")
-            if not name:
-                return []
+            if not name or not self.params.known(name):
+                return []  # PX4 v1.15: console error only, no echo
             raw_type = int(msg.get("param_type", ParamType.REAL32))
             raw = float(msg.get("param_value", 0.0))
             if (

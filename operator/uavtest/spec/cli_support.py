@@ -15,6 +15,7 @@ from uavtest.spec.commands import resolved_commands
 from uavtest.spec.crd import crd_yaml
 from uavtest.spec.loaders import load_test
 from uavtest.spec.mission import mission_items
+from uavtest.spec.px4_params import unmodelled_notice, unmodelled_params
 from uavtest.spec.render import render
 from uavtest.spec.yaml_io import dump_yaml
 
@@ -38,6 +39,9 @@ def validate_command(test: Path, *, out: TextIO | None = None) -> int:
         f"{_plural(len(spec.world.obstacles), 'obstacle')}",
         file=out,
     )
+    notice = unmodelled_notice(unmodelled_params(spec))
+    if notice:
+        print(f"warning: {notice}", file=out)
     return int(ExitCode.PASS)
 
 

@@ -23,6 +23,7 @@ from uavtest.spec.models import API_VERSION, KIND, UavTest
 from uavtest.spec.params_csv import read_params_csv
 from uavtest.spec.paths import resolve_reference
 from uavtest.spec.plan import parse_plan, plan_home, read_plan
+from uavtest.spec.px4_params import check_params
 from uavtest.spec.validation import bad_input_from, model_fields_of
 from uavtest.spec.yaml_io import check_file_size, parse_yaml
 
@@ -135,9 +136,12 @@ def resolve_references(test: UavTest, test_file: Path | None, *, source: str | N
         parse_plan(plan, plan_source, home_alt=(home or spec.world.home).alt, prefix=prefix)
         if home is not None and "home" not in spec.world.model_fields_set:
             s["world"]["home"] = home.dump()
+    check_params(spec.vehicle.params, source=source, field_prefix="spec.vehicle.params")
     if spec.vehicle.params_file is not None:
         path = resolve_reference(spec.vehicle.params_file, test_file, field="spec.vehicle.paramsFile")
-        s["vehicle"]["params"] = {**read_params_csv(path), **spec.vehicle.params}
+        from_file = read_params_csv(path)
+        check_params({k: v for k, v in from_file.items() if k not in spec.vehicle.params}, source=str(path))
+        s["vehicle"]["params"] = {**from_file, **spec.vehicle.params}
         del s["vehicle"]["paramsFile"]
     if spec.commands_file is not None:
         path = resolve_reference(spec.commands_file, test_file, field="spec.commandsFile")

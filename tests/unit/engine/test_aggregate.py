@@ -85,3 +85,14 @@ def test_aggregate_of_only_errors_writes_a_summary_without_plot(tmp_path: Path) 
     assert summary.results[1].reason.startswith("unreadable ")
     assert json.loads(store.get(aggregate_key(NS, TEST, RUN, "summary.json")))["verdict"] == "error"
     assert not store.exists(aggregate_key(NS, TEST, RUN, "trajectories.png"))
+
+
+def test_the_summary_names_params_the_builtin_simulator_ignores(tmp_path: Path) -> None:
+    store = LocalStore(tmp_path)
+    _put_replica(store, 0, Verdict.PASS)
+    spec = _spec().model_copy(deep=True)
+    spec.vehicle.params = {"NAV_ACC_RAD": 1.0, "EKF2_GPS_DELAY": 100.0}
+    summary = aggregate_run(store, NS, TEST, RUN, [0], spec)
+    assert summary.unmodelled_params == ["EKF2_GPS_DELAY"]
+    stored = json.loads(store.get(aggregate_key(NS, TEST, RUN, "summary.json")))
+    assert stored["unmodelled_params"] == ["EKF2_GPS_DELAY"]

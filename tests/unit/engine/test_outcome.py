@@ -49,3 +49,14 @@ def test_table_and_summary_line_show_each_replica_and_flakiness() -> None:
     line = summary_line(summary)
     assert "1 passed · 1 failed · 1 error" in line
     assert "flakiness 0.50" in line and "flaky yes" in line
+
+
+def test_the_run_output_warns_about_unmodelled_params() -> None:
+    from uavtest.engine.outcome import unmodelled_line
+
+    summary = summarize([_r(0, Verdict.PASS)], test="t", namespace="local", run_id="r")
+    assert unmodelled_line(summary) is None
+    summary = summary.model_copy(update={"unmodelled_params": ["EKF2_GPS_DELAY"]})
+    assert unmodelled_line(summary) == (
+        "warning: 1 PX4 parameter set by the test has no effect in the built-in simulator: EKF2_GPS_DELAY"
+    )

@@ -98,3 +98,16 @@ def test_no_answer_to_sets_is_an_error_after_the_attempts() -> None:
 def test_no_parameters_is_done_at_once() -> None:
     setter = ParamSetter({})
     assert setter.start(0.0) == [] and setter.done
+
+
+def test_a_parameter_the_vehicle_never_answers_for_is_named_as_not_accepted() -> None:
+    """PX4 v1.15 answers neither the read nor the set of a name it lacks (and nor does the sim)."""
+    setter = ParamSetter({"NAV_ACC_RA": 0.5}, retry_s=1.0, attempts=2)
+    setter.start(0.0)
+    assert setter.tick(1.0) == [ParamRequestRead("NAV_ACC_RA")]
+    assert setter.tick(2.0) == [ParamSet("NAV_ACC_RA", 0.5, REAL32)]  # reads unanswered: set it anyway
+    assert setter.tick(3.0) == [ParamSet("NAV_ACC_RA", 0.5, REAL32)]
+    assert setter.tick(4.0) == []
+    assert setter.done
+    assert setter.error is not None
+    assert setter.error.startswith("PX4 did not accept parameter NAV_ACC_RA (unknown to this firmware?)")

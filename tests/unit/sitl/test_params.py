@@ -46,14 +46,38 @@ def test_an_int_param_set_as_a_plain_float_is_rounded():
     assert proto.params["NAV_RCL_ACT"] == 3 and proto.params.type_of("NAV_RCL_ACT") == ParamType.INT32
 
 
-def test_unknown_params_are_stored_and_echoed():
+def test_a_name_px4_v1_15_lacks_gets_no_answer_like_px4() -> None:
+    """PX4 v1.15 (mavlink_parameters.cpp): PARAM_SET of an unknown name is a console error only."""
     proto = ParamProtocol(ParamStore())
     count = len(proto.params)
-    reply = _set(proto, "MY_PARAM", 1.25, ParamType.REAL32)
-    assert reply.fields["param_value"] == 1.25
-    assert reply.fields["param_count"] == count + 1
-    read = proto.handle(Msg("PARAM_REQUEST_READ", {"param_id": "MY_PARAM", "param_index": -1}))
-    assert read and read[0].fields["param_value"] == 1.25
+    msg = Msg("PARAM_SET", {"param_id": "MY_PARAM", "param_value": 1.25, "param_type": ParamType.REAL32})
+    assert proto.handle(msg) == []
+    assert "MY_PARAM" not in proto.params and len(proto.params) == count and proto.changed == []
+    assert proto.handle(Msg("PARAM_REQUEST_READ", {"param_id": "MY_PARAM", "param_index": -1})) == []
+
+
+def test_a_px4_parameter_the_vehicle_does_not_model_is_stored_and_echoed() -> None:
+    proto = ParamProtocol(ParamStore())
+    count = len(proto.params)
+    read = proto.handle(Msg("PARAM_REQUEST_READ", {"param_id": "EKF2_GPS_DELAY", "param_index": -1}))
+    assert read and read[0].fields["param_type"] == ParamType.REAL32
+    assert read[0].fields["param_value"] == 110.0  # PX4's value
+    assert read[0].fields["param_count"] == count + 1
+    # PX4 keeps its own type: an INT32 parameter set as a plain float stays INT32
+    reply = _set(proto, "SYS_HAS_GPS", 0.0, ParamType.REAL32)
+    assert reply.fields["param_type"] == ParamType.INT32
+    assert decode_param_value(reply.fields["param_value"], ParamType.INT32) == 0
+
+
+def test_a_px4_parameter_read_by_code_that_was_never_stored_has_its_sih_value() -> None:
+    p = ParamStore()
+    assert p["COM_LOW_BAT_ACT"] == 2 and p.type_of("COM_LOW_BAT_ACT") == ParamType.INT32
+    try:
+        p["NO_SUCH_PARAM"]
+    except KeyError:
+        pass
+    else:
+        raise AssertionError("an unknown name must raise KeyError")
 
 
 def test_list_and_read_by_index():
