@@ -83,6 +83,10 @@ class ReplicaResult(_Result):
     sim_time: float | None = Field(None, description="vehicle seconds flown")
     wall_time: float | None = Field(None, description="wall-clock seconds the replica took")
     attempts: int = Field(1, ge=1, description="1 + retries after bench errors")
+    warnings: list[str] = Field(
+        default_factory=list,
+        description="what the simulator could not simulate (e.g. PX4 SIH: obstacles, wind)",
+    )
 
 
 class Stats(_Result):
@@ -109,4 +113,5 @@ class RunSummary(_Result):
     verdict: Verdict = Field(description="pass: all valid passed; fail: any failed; error: only errors")
     min_obstacle_distance: Stats | None = None
     flight_time: Stats | None = None
+    warnings: list[str] = Field(default_factory=list, description="the replicas' warnings, each once")
     results: list[ReplicaResult] = Field(default_factory=list)

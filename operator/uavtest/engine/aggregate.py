@@ -79,6 +79,7 @@ def aggregate_run(
     from uavtest.analysis.average import average_trajectories
     from uavtest.analysis.flakiness import summarize
     from uavtest.analysis.plots import plot_run
+    from uavtest.analysis.verdict import simulator_warnings
 
     results: list[ReplicaResult] = []
     trajectories: list[Trajectory] = []
@@ -88,6 +89,8 @@ def aggregate_run(
         if trajectory is not None and len(trajectory) >= 2 and trajectory.duration > 0:
             trajectories.append(trajectory)
     summary = summarize(results, test=test, namespace=namespace, run_id=run_id)
+    # the simulator's limits, also when no replica wrote a result.json
+    summary.warnings = list(dict.fromkeys([*simulator_warnings(spec), *summary.warnings]))
     if trajectories:
         average = average_trajectories(trajectories)
         store.put(

@@ -33,6 +33,8 @@ def run_command(
         stdout = Console(soft_wrap=True)
         stdout.print(results_table(summary))
         stdout.print(summary_line(summary), highlight=False)
+        for w in summary.warnings:
+            stdout.print(f"warning: {w}", highlight=False)
         stdout.print(f"summary: {run.summary_path}", highlight=False)
         if run.plot_path is not None:
             stdout.print(f"plot:    {run.plot_path}", highlight=False)
