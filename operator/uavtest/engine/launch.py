@@ -23,7 +23,16 @@ import threading
 from pathlib import Path
 from typing import Protocol
 
-__all__ = ["ENTRY_MODULE", "PRELOAD", "ExecLauncher", "Launcher", "Started", "WarmLauncher", "is_uavtest_cli", "start_exec"]
+__all__ = [
+    "ENTRY_MODULE",
+    "PRELOAD",
+    "ExecLauncher",
+    "Launcher",
+    "Started",
+    "WarmLauncher",
+    "is_uavtest_cli",
+    "start_exec",
+]
 
 # What a warm process imports before forking: the hot path of both replica processes.
 # Not uavtest.cli: when the engine runs as ``python -m uavtest.cli``, each child re-runs that

@@ -21,7 +21,7 @@ from uavtest.analysis.ulog import (
     read_ulog,
     trajectory_from_ulog,
 )
-from uavtest.analysis.verdict import judge, simulator_warnings
+from uavtest.analysis.verdict import NEVER_TOOK_OFF, judge, simulator_warnings
 from uavtest.errors import UavTestError
 from uavtest.runner.core import Ending, FlightReport
 from uavtest.runner.plan import flight_commands
@@ -119,6 +119,22 @@ def analyse(
     warnings = simulator_warnings(spec)
     for w in warnings:
         log.warning("%s", w)
+    def refused() -> Analysis:
+        """The vehicle refused to arm: no flight and (usually) no log — the vehicle's doing."""
+        reason = NEVER_TOOK_OFF + ": " + (vehicle_reason(report) or "the vehicle refused to arm")
+        log.info("verdict fail: %s", reason)
+        result = ReplicaResult(
+            index=index,
+            seed=seed,
+            verdict=Verdict.FAIL,
+            reason=reason,
+            metrics=FlightMetrics(flight_time=0.0),
+            sim_time=report.sim_time,
+            wall_time=wall_time,
+            warnings=warnings,
+        )
+        return Analysis(result, trajectory)
+
     trajectory: Trajectory | None = None
     ulog = None
     read_error: str | None = None
@@ -130,6 +146,8 @@ def analyse(
             read_error = f"log unreadable: {e}"
     if report.error:
         return error(report.error, trajectory)
+    if report.ending is Ending.REFUSED and (ulog is None or trajectory is None or not len(trajectory)):
+        return refused()
     if log_path is None:
         return error(log_error or "log missing")
     if ulog is None or trajectory is None:
@@ -148,7 +166,7 @@ def analyse(
         refusal=vehicle_reason(report),
     )
     if report.ending is Ending.REFUSED and verdict is Verdict.PASS:
-        verdict, reason = Verdict.FAIL, vehicle_reason(report) or "the vehicle refused to arm"
+        return refused()
     log.info("verdict %s%s", verdict, f": {reason}" if reason else "")
     return Analysis(
         ReplicaResult(

@@ -33,7 +33,9 @@ def test_exit_codes_and_output_files_match_exec(
     assert "--run-id" in out.read_text()
 
     absent = str(tmp_path / "absent.yaml")
-    bad = start(_cli("runner", "--test", absent, "--store", str(tmp_path), "--run-id", "r"), stdout=out, stderr=err)
+    bad = start(
+        _cli("runner", "--test", absent, "--store", str(tmp_path), "--run-id", "r"), stdout=out, stderr=err
+    )
     assert bad.wait(timeout=60) == 2
     assert "absent.yaml" in err.read_text()
 
@@ -66,14 +68,17 @@ def test_a_forked_simulator_is_stopped_cleanly(warm: WarmLauncher, tmp_path: Pat
 def test_only_uavtest_cli_commands_are_forked() -> None:
     assert is_uavtest_cli(_cli("runner"))
     assert not is_uavtest_cli([sys.executable, "-c", "pass"])
-    assert not is_uavtest_cli([sys.executable, "-m", "uavtest.cli", "runner"])  # the engine never runs the CLI
+    assert not is_uavtest_cli(
+        [sys.executable, "-m", "uavtest.cli", "runner"]
+    )  # the engine never runs the CLI
     assert not is_uavtest_cli(["/opt/px4/bin/px4", "-i", "0"])
 
 
 def test_the_engine_does_not_import_the_cli() -> None:
     """The replica processes have their own entry point: nothing under engine imports uavtest.cli."""
     code = (
-        "import sys, uavtest.engine.launch, uavtest.engine.replica, uavtest.engine.local, uavtest.engine.entry;"
+        "import sys, uavtest.engine.launch, uavtest.engine.replica, uavtest.engine.local;"
+        "import uavtest.engine.entry;"
         "sys.exit('uavtest.cli' in sys.modules)"
     )
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0

@@ -9,12 +9,12 @@ import pytest
 from uavtest.runner.commands import (
     CommandScheduler,
     Refusal,
-    command_name,
-    unsupported_reason,
     arm_command,
+    command_name,
     disarm_command,
     mode_command,
     speed_command,
+    unsupported_reason,
 )
 from uavtest.runner.events import CommandAck, CommandLong, ManualControl
 from uavtest.runner.px4 import AckResult, Cmd, custom_mode, mode_name
@@ -125,7 +125,8 @@ def test_an_unsupported_command_is_a_bench_error_and_a_denied_mode_a_refusal() -
             "builtin",
             cmd(0, "speed", speed=3),
             Cmd.DO_CHANGE_SPEED,
-            "the built-in simulator does not support MAV_CMD_DO_CHANGE_SPEED; fly this test with simulator: px4",
+            "the built-in simulator does not support MAV_CMD_DO_CHANGE_SPEED; "
+            "fly this test with simulator: px4",
         ),
         ("px4", cmd(0, "mode", mode="offboard"), MODE, "PX4 does not support mode offboard"),
     ],

@@ -161,7 +161,9 @@ def test_a_refused_arm_for_too_long_ends_the_flight_as_refused_not_a_bench_error
     fly_lockstep(core, vehicle, [(0.0, 0.0, 0.0)], land_after=10**6)
     rep = core.report
     assert core.done and rep.ending is Ending.REFUSED and rep.error is None
-    assert [(r.label, r.result, r.final) for r in rep.refusals] == [("arm (for mode mission)", "DENIED", True)]
+    assert [(r.label, r.result, r.final) for r in rep.refusals] == [
+        ("arm (for mode mission)", "DENIED", True)
+    ]
     assert any("vehicle refused arm (for mode mission) for 2 s (COMMAND_ACK DENIED)" in n for n in rep.notes)
 
 
