@@ -494,7 +494,9 @@ class ReplicaCore:
         out: list[Outgoing] = []
         if self.lockstep and self._waiting_at is not None:
             out.append(self._grant())  # one more step, so the simulator acts on the disarm and closes its log
-        if self.cfg.download_log and self.report.ending is not Ending.ERROR:
+        rep = self.report
+        never_armed_refusal = rep.ending is Ending.REFUSED and not rep.armed_ever  # no log to fetch
+        if self.cfg.download_log and rep.ending is not Ending.ERROR and not never_armed_refusal:
             self.stage = Stage.LOG
             out += self.downloader.start(wall)
         else:

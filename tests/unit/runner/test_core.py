@@ -262,3 +262,14 @@ def test_a_stale_disarmed_heartbeat_right_after_arming_does_not_end_the_flight()
     assert core.stage is Stage.FLIGHT  # sent before the arm took effect: not a landing
     fly_lockstep(core, vehicle, [(0.0, 0.0, -3.0)], land_after=10**6)
     assert core.report.ending is Ending.TIMEOUT and core.report.armed_ever
+
+
+def test_a_refused_arm_downloads_no_log_the_vehicle_never_wrote() -> None:
+    core = ReplicaCore(config(download_log=True))
+    core.scheduler.arm_give_up_ms = 2000
+    vehicle = ScriptedVehicle(refuse_arm=True)
+    core.start(0.0)
+    exchange(core, vehicle, [*boot(0), LockstepAnnounce(0)], wall=0.1)
+    fly_lockstep(core, vehicle, [(0.0, 0.0, 0.0)], land_after=10**6)
+    assert core.done and core.report.ending is Ending.REFUSED
+    assert core.report.error is None and core.report.log_data is None
