@@ -119,6 +119,7 @@ def analyse(
     warnings = simulator_warnings(spec)
     for w in warnings:
         log.warning("%s", w)
+
     def refused() -> Analysis:
         """The vehicle refused to arm: no flight and (usually) no log — the vehicle's doing."""
         reason = NEVER_TOOK_OFF + ": " + (vehicle_reason(report) or "the vehicle refused to arm")
