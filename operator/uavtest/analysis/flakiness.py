@@ -60,5 +60,6 @@ def summarize(results: Sequence[ReplicaResult], *, test: str, namespace: str, ru
         verdict=verdict,
         min_obstacle_distance=stats(r.metrics.min_obstacle_distance for r in valid if r.metrics),
         flight_time=stats(r.metrics.flight_time for r in valid if r.metrics),
+        warnings=list(dict.fromkeys(w for r in ordered for w in r.warnings)),
         results=list(ordered),
     )

@@ -87,6 +87,10 @@ class ReplicaResult(_Result):
         default_factory=list,
         description="PX4 parameters the test sets that have no effect in the built-in simulator",
     )
+    warnings: list[str] = Field(
+        default_factory=list,
+        description="what the simulator could not simulate (e.g. PX4 SIH: obstacles, wind)",
+    )
 
 
 class Stats(_Result):
@@ -113,6 +117,7 @@ class RunSummary(_Result):
     verdict: Verdict = Field(description="pass: all valid passed; fail: any failed; error: only errors")
     min_obstacle_distance: Stats | None = None
     flight_time: Stats | None = None
+    warnings: list[str] = Field(default_factory=list, description="the replicas' warnings, each once")
     results: list[ReplicaResult] = Field(default_factory=list)
     unmodelled_params: list[str] = Field(
         default_factory=list,

@@ -1,9 +1,14 @@
 """A flight's metrics and verdict against the test's assertions (pure).
 
 ``judge`` returns ``pass`` or ``fail``: an assertion that does not hold is the drone's fault.
-Bench errors (``error``) are decided by the runner, which knows whether the bench failed; an
-empty flight (the vehicle never took off) is judged like any other — a mission then is not
-completed, while a test with no mission and no other assertion passes.
+Bench errors (``error``) are decided by the runner, which knows whether the bench failed.
+
+A verdict is never given on a flight that did not happen. ``flight_intent`` decides from the spec
+alone whether a test flies (a mission, or commands that arm and command flight). When a test that
+flies has an empty trajectory (the vehicle never took off) the replica is ``fail``, the reason
+saying so (with the vehicle's refusal when there was one), and the assertions that need a flight
+— noCollision, minObstacleDistance, geofence, similarity — are reported "not judged" instead of
+passing by default. A test that by design does not fly (ground commands only) is judged as before.
 """
 
 from __future__ import annotations
@@ -17,14 +22,84 @@ from uavtest.analysis.mission import acceptance_radius, mission_targets, progres
 from uavtest.analysis.models import AssertionResult, FlightMetrics, MissionProgress, Verdict
 from uavtest.analysis.similarity import similarity
 from uavtest.analysis.trajectory import Trajectory
-from uavtest.spec.models import Assertions, Geofence, Obstacle, ReferenceTrajectory, UavTestSpec
+from uavtest.spec.models import (
+    Assertions,
+    Command,
+    CommandAction,
+    FlightMode,
+    Geofence,
+    Obstacle,
+    ReferenceTrajectory,
+    Simulator,
+    UavTestSpec,
+)
 
 __all__ = [
+    "NEVER_TOOK_OFF",
+    "flight_intent",
     "geofence_violation",
     "judge",
     "judge_flight",
     "reference_from_points",
+    "simulator_warnings",
 ]
+
+NEVER_TOOK_OFF = "the vehicle never took off"
+
+#: modes that fly the vehicle by themselves once armed
+_FLYING_MODES = frozenset({FlightMode.MISSION, FlightMode.TAKEOFF, FlightMode.OFFBOARD})
+_CLIMB_THROTTLE = 0.5  # sticks z above this climbs (0.5 holds altitude in altitude / position mode)
+
+
+def flight_intent(spec: UavTestSpec, commands: Sequence[Command] | None = None) -> str | None:
+    """Why ``spec`` flies (e.g. "the test has a mission", "mode offboard at t=2 s"), or None
+    when by design it does not (only ground commands, no mission, no arming). Pure.
+
+    ``commands``: the test's timed commands (default ``spec.commands``; pass
+    ``uavtest.spec.commands.resolved_commands(spec)`` to include a ``commandsFile``).
+
+    A test flies when it has a mission, or when its commands arm the vehicle (``arm``, or
+    ``mode mission`` / ``mode takeoff``, which arm first) and command flight: mode mission,
+    takeoff or offboard, or a climb on the sticks (throttle above 0.5) in manual, altitude or
+    position mode (or in no mode command at all).
+    """
+    if spec.mission is not None:
+        return "the test has a mission"
+    cmds = sorted(spec.commands if commands is None else commands, key=lambda c: c.at)
+    arming = (FlightMode.MISSION, FlightMode.TAKEOFF)  # Aerialist semantics: these arm first
+    if not any(c.action is CommandAction.ARM or c.mode in arming for c in cmds):
+        return None
+    for c in cmds:
+        if c.action is CommandAction.MODE and c.mode in _FLYING_MODES:
+            assert c.mode is not None
+            return f"mode {c.mode.value} at t={c.at:g} s"
+        if c.action is CommandAction.STICKS and c.sticks is not None and c.sticks.z > _CLIMB_THROTTLE:
+            return f"sticks with thrust at t={c.at:g} s"
+    return None
+
+
+def simulator_warnings(spec: UavTestSpec) -> list[str]:
+    """What the chosen simulator cannot simulate in ``spec``, to be said with the results.
+
+    PX4 SITL with SIH (the PX4 simulator uavtest runs) has no obstacles — the vehicle flies
+    through them, so they are only judged geometrically against the trajectory — and, in PX4
+    v1.15, no wind model (SIH's SIH_WIND_N/E parameters arrived after v1.15).
+    """
+    if spec.vehicle.simulator is not Simulator.PX4:
+        return []
+    out: list[str] = []
+    if spec.world.obstacles:
+        n = len(spec.world.obstacles)
+        out.append(
+            f"PX4 SITL (SIH) has no obstacles: the {n} obstacle(s) are judged only geometrically "
+            "against the trajectory; the vehicle cannot crash into them"
+        )
+    w = spec.world.wind
+    if w.mean_speed > 0 or (w.max_speed or 0) > 0:
+        out.append(
+            f"PX4 SITL (SIH, v1.15) has no wind model: the wind ({w.mean_speed:g} m/s) is not simulated"
+        )
+    return out
 
 
 def reference_from_points(reference: ReferenceTrajectory) -> Trajectory:
@@ -58,8 +133,15 @@ def judge_flight(
     reference: Trajectory | None = None,
     vehicle_radius: float = 0.0,
     crash: str | None = None,
+    expect_flight: bool = False,
+    refusal: str | None = None,
 ) -> tuple[FlightMetrics, list[AssertionResult], Verdict, str]:
     """Measure the flight and check each assertion that applies.
+
+    ``expect_flight``: the test flies (``flight_intent``). Then an empty ``trajectory`` is a
+    ``fail`` whose reason starts "the vehicle never took off" (followed by ``refusal``, the
+    vehicle's own reason when it refused a command), and the assertions that need a flight
+    (noCollision, minObstacleDistance, geofence, similarity) are "not judged" (not passed).
 
     ``crash``: a crash the log itself reports (``uavtest.analysis.ulog.crash_reported``); it
     counts as a collision even when the logged estimate stops short of the box.
@@ -69,7 +151,16 @@ def judge_flight(
     a known ``mission`` (e.g. from the log's ``mission_result``) is still checked.
     """
     flew = len(trajectory) > 0
+    unjudged = expect_flight and not flew  # a flight was due and did not happen
     results: list[AssertionResult] = []
+
+    def not_judged(name: str, limit: float | None = None) -> None:
+        results.append(
+            AssertionResult(
+                name=name, passed=False, limit=limit, message=f"{name} not judged: {NEVER_TOOK_OFF}"
+            )
+        )
+
     metrics = FlightMetrics(
         flight_time=trajectory.duration if flew else 0.0,
         max_altitude=float(trajectory.altitude.max()) if flew else None,
@@ -82,7 +173,9 @@ def judge_flight(
         metrics.collision = bool(d.min() <= 0.0)
     if crash is not None:
         metrics.collision = True
-    if obstacles and assertions.no_collision:
+    if obstacles and assertions.no_collision and unjudged and crash is None:
+        not_judged("noCollision", 0.0)
+    elif obstacles and assertions.no_collision:
         hit = metrics.collision
         where = ""
         if hit and flew and bool((d <= 0.0).any()):
@@ -99,6 +192,8 @@ def judge_flight(
                 message=f"collision with an obstacle{where}" if hit else "no collision",
             )
         )
+    if obstacles and assertions.min_obstacle_distance is not None and unjudged:
+        not_judged("minObstacleDistance", assertions.min_obstacle_distance)
     if obstacles and assertions.min_obstacle_distance is not None and flew:
         limit = assertions.min_obstacle_distance
         dist = metrics.min_obstacle_distance
@@ -156,7 +251,9 @@ def judge_flight(
         )
 
     # ----------------------------------------------------------------- geofence
-    if assertions.geofence is not None:
+    if assertions.geofence is not None and unjudged:
+        not_judged("geofence", 0.0)
+    elif assertions.geofence is not None:
         out = geofence_violation(trajectory, assertions.geofence)
         metrics.geofence_violation = out
         results.append(
@@ -177,7 +274,9 @@ def judge_flight(
         metric = sim.metric.value if sim is not None else "dtw"
         metrics.similarity = similarity(metric, trajectory, reference)
         metrics.similarity_metric = metric
-    if sim is not None:
+    if sim is not None and unjudged:
+        not_judged("similarity", sim.threshold)
+    elif sim is not None:
         if metrics.similarity is None:
             why = "no reference trajectory" if reference is None or not len(reference) else "no flight"
             results.append(
@@ -201,9 +300,11 @@ def judge_flight(
             )
 
     failed = [r for r in results if not r.passed]
-    verdict = Verdict.FAIL if failed else Verdict.PASS
-    reason = "; ".join(r.message for r in failed)
-    return metrics, results, verdict, reason
+    reasons = [r.message for r in failed]
+    if unjudged:
+        reasons.insert(0, NEVER_TOOK_OFF + (f": {refusal}" if refusal else ""))
+    verdict = Verdict.FAIL if reasons else Verdict.PASS
+    return metrics, results, verdict, "; ".join(reasons)
 
 
 def judge(
@@ -214,8 +315,13 @@ def judge(
     reference: Trajectory | None = None,
     vehicle_radius: float = 0.0,
     crash: str | None = None,
+    commands: Sequence[Command] | None = None,
+    refusal: str | None = None,
 ) -> tuple[FlightMetrics, list[AssertionResult], Verdict, str]:
     """Metrics, assertion results, verdict (pass / fail) and reason of one flight of ``spec``.
+
+    Whether a flight was due is ``flight_intent(spec, commands)``; ``refusal`` is the vehicle's
+    reason when it refused a command (see ``judge_flight``).
 
     ``mission``: progress from the log's ``mission_result``; when None and the test has a
     mission, it is worked out from the path (``uavtest.analysis.mission``). ``reference``: the
@@ -234,4 +340,6 @@ def judge(
         reference=reference,
         vehicle_radius=vehicle_radius,
         crash=crash,
+        expect_flight=flight_intent(spec, commands) is not None,
+        refusal=refusal,
     )

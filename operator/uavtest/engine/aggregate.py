@@ -80,6 +80,7 @@ def aggregate_run(
     from uavtest.analysis.average import average_trajectories
     from uavtest.analysis.flakiness import summarize
     from uavtest.analysis.plots import plot_run
+    from uavtest.analysis.verdict import simulator_warnings
 
     results: list[ReplicaResult] = []
     trajectories: list[Trajectory] = []
@@ -90,6 +91,8 @@ def aggregate_run(
             trajectories.append(trajectory)
     summary = summarize(results, test=test, namespace=namespace, run_id=run_id)
     summary = summary.model_copy(update={"unmodelled_params": unmodelled_params(spec)})
+    # the simulator's limits, also when no replica wrote a result.json
+    summary.warnings = list(dict.fromkeys([*simulator_warnings(spec), *summary.warnings]))
     if trajectories:
         average = average_trajectories(trajectories)
         store.put(

@@ -36,6 +36,8 @@ def run_command(
         warning = unmodelled_line(summary)
         if warning:
             stdout.print(warning, highlight=False)
+        for w in summary.warnings:
+            stdout.print(f"warning: {w}", highlight=False)
         stdout.print(f"summary: {run.summary_path}", highlight=False)
         if run.plot_path is not None:
             stdout.print(f"plot:    {run.plot_path}", highlight=False)

@@ -3,10 +3,11 @@
 A ``uavtest runner`` or ``uavtest sitl`` process spends most of its start-up importing numpy,
 pydantic and pymavlink — about as long as flying a whole competition mission in lockstep. The
 ``WarmLauncher`` starts one multiprocessing fork server that has imported them once; each
-``python -m uavtest.cli ...`` command is then a fresh process forked from it, in its own
-session, with its own stdin/stdout/stderr, running exactly the same CLI entry point with the
-same arguments. Anything else (PX4's binary, test doubles) is exec'd with ``subprocess``.
-Both kinds of process are handled through the ``Started`` protocol (a subset of ``Popen``).
+``python -m uavtest.engine.entry ...`` command (the replica processes' own entry point, see
+``uavtest.engine.entry``) is then a fresh process forked from it, in its own session, with its own
+stdin/stdout/stderr, running exactly the same entry point with the same arguments. Anything
+else (PX4's binary, test doubles) is exec'd with ``subprocess``. Both kinds of process are
+handled through the ``Started`` protocol (a subset of ``Popen``).
 """
 
 from __future__ import annotations
@@ -22,12 +23,28 @@ import threading
 from pathlib import Path
 from typing import Protocol
 
-__all__ = ["PRELOAD", "ExecLauncher", "Launcher", "Started", "WarmLauncher", "is_uavtest_cli", "start_exec"]
+__all__ = [
+    "ENTRY_MODULE",
+    "PRELOAD",
+    "ExecLauncher",
+    "Launcher",
+    "Started",
+    "WarmLauncher",
+    "is_uavtest_cli",
+    "start_exec",
+]
 
 # What a warm process imports before forking: the hot path of both replica processes.
-# Not uavtest.cli itself: when the engine runs as ``python -m uavtest.cli``, each child re-runs
-# that module as ``__mp_main__`` and runpy warns if it is already imported.
-PRELOAD = ["typer", "rich.console", "uavtest.engine.launch", "uavtest.runner.main", "uavtest.sitl.main"]
+# Not uavtest.cli: when the engine runs as ``python -m uavtest.cli``, each child re-runs that
+# module as ``__mp_main__`` and runpy warns if it is already imported.
+PRELOAD = [
+    "typer",
+    "uavtest.engine.entry",
+    "uavtest.engine.launch",
+    "uavtest.runner.main",
+    "uavtest.sitl.main",
+]
+ENTRY_MODULE = "uavtest.engine.entry"  # what a warm process runs (never uavtest.cli)
 
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
@@ -105,8 +122,8 @@ class ExecLauncher:
 
 
 def is_uavtest_cli(argv: list[str]) -> bool:
-    """``[python, -m, uavtest.cli, ...]``: a command a warm process can run."""
-    return len(argv) >= 3 and argv[1:3] == ["-m", "uavtest.cli"]
+    """``[python, -m, uavtest.engine.entry, ...]``: a command a warm process can run."""
+    return len(argv) >= 3 and argv[1:3] == ["-m", ENTRY_MODULE]
 
 
 def _die_with_parent() -> None:
@@ -133,7 +150,7 @@ def _die_with_parent() -> None:
 
 
 def _run_cli(args: list[str], stdout: str | None, stderr: str, cwd: str | None) -> None:
-    """In the forked process: own session and files, then the CLI entry point as ``uavtest``."""
+    """In the forked process: own session and files, then the replica entry point."""
     os.setsid()
     _die_with_parent()
     fds = (
@@ -147,7 +164,7 @@ def _run_cli(args: list[str], stdout: str | None, stderr: str, cwd: str | None) 
     if cwd:
         os.chdir(cwd)
     sys.argv = ["uavtest", *args]
-    from uavtest.cli import main
+    from uavtest.engine.entry import main
 
     main()
 
@@ -189,7 +206,7 @@ class WarmLauncher:
     """Forks ``uavtest`` CLI commands from a fork server that has imported the hot path once.
 
     The fork server starts with the first command (one import, ~1 s) and ends with this
-    process. Commands that are not ``python -m uavtest.cli`` are exec'd.
+    process. Commands that are not ``python -m uavtest.engine.entry`` are exec'd.
     """
 
     def __init__(self, preload: list[str] | None = None) -> None:

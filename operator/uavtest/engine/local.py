@@ -255,6 +255,7 @@ def _import_aggregation() -> None:
 
 def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRun:
     """Fly a test's replicas locally and aggregate them; raises BadInput before flying anything."""
+    from uavtest.analysis.verdict import simulator_warnings
     from uavtest.engine.aggregate import aggregate_run
     from uavtest.spec.loaders import load_test
     from uavtest.store import LocalStore
@@ -269,6 +270,8 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     ]
     for n in notices:
         console.print(f"[cyan]notice:[/] {n}", highlight=False)
+    for w in simulator_warnings(test.spec):
+        console.print(f"[yellow]warning:[/] {w}", highlight=False)
     px4_bin = _px4_bin(test, settings, options.test)
 
     replicas = options.replicas if options.replicas is not None else test.spec.replicas

@@ -28,7 +28,7 @@ from pathlib import Path
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from uavtest.analysis.models import ReplicaResult, Verdict
-from uavtest.engine.launch import ExecLauncher, Launcher, Started
+from uavtest.engine.launch import ENTRY_MODULE, ExecLauncher, Launcher, Started
 from uavtest.engine.ports import PortAllocator, ReplicaPorts
 from uavtest.engine.px4home import px4_home_env, sih_latlon_is_int
 from uavtest.errors import UavTestError
@@ -108,7 +108,7 @@ def sitl_command(
 
     The simulator sends from any free local port; ``gcs_port`` None keeps PX4's 14550.
     """
-    argv = [python, "-m", "uavtest.cli", "sitl", "--test", str(test), "--seed", str(seed)]
+    argv = [python, "-m", ENTRY_MODULE, "sitl", "--test", str(test), "--seed", str(seed)]
     argv += ["--host", "127.0.0.1", "--api-port", str(api_port)]
     if gcs_port is not None:
         argv += ["--gcs-port", str(gcs_port)]
@@ -122,7 +122,7 @@ def plan_processes(job: ReplicaJob, ports: ReplicaPorts, log_dir: Path) -> Proce
     runner = [
         job.python,
         "-m",
-        "uavtest.cli",
+        ENTRY_MODULE,
         "runner",
         "--test",
         test,

@@ -1,7 +1,10 @@
 """Stage 7: the replica's verdict, from what the core saw and the flight log.
 
 Bench faults (the core's error, a missing or unreadable log) are ``error`` with the reason and are
-never judged; otherwise ``uavtest.analysis.judge`` decides ``pass`` or ``fail`` from the log.
+never judged; otherwise ``uavtest.analysis.judge`` decides ``pass`` or ``fail`` from the log. A
+test that flies whose vehicle never took off is ``fail`` with the vehicle's reason
+(``vehicle_reason``: the commands it refused, with its STATUSTEXTs); a vehicle that refused to
+arm until the runner gave up is ``fail`` even in a test that does not fly.
 """
 
 from __future__ import annotations
@@ -18,14 +21,47 @@ from uavtest.analysis.ulog import (
     read_ulog,
     trajectory_from_ulog,
 )
-from uavtest.analysis.verdict import judge
+from uavtest.analysis.verdict import NEVER_TOOK_OFF, judge, simulator_warnings
 from uavtest.errors import UavTestError
-from uavtest.runner.core import FlightReport
+from uavtest.runner.core import Ending, FlightReport
+from uavtest.runner.plan import flight_commands
 from uavtest.spec.models import UavTestSpec
 
-__all__ = ["Analysis", "analyse", "online_metrics"]
+__all__ = ["Analysis", "analyse", "online_metrics", "vehicle_reason"]
 
 log = logging.getLogger(__name__)
+
+STATUS_WINDOW_MS = 1000  # STATUSTEXTs up to this long after a refusing ACK belong to it
+WARNING_SEVERITY = 4  # MAV_SEVERITY_WARNING: this and more severe explain a vehicle's refusal
+
+
+def _quoted(texts: list[str]) -> str:
+    return "; ".join(f'"{t}"' for t in dict.fromkeys(texts))
+
+
+def vehicle_reason(report: FlightReport) -> str | None:
+    """Why the vehicle did not fly, in its own words, or None when it refused nothing and said
+    nothing of warning severity. Pure.
+
+    Each refused command (unique by label) with the STATUSTEXTs the vehicle sent between the
+    command and ``STATUS_WINDOW_MS`` after its ACK, e.g. 'vehicle refused arm (COMMAND_ACK
+    DENIED): "Arming denied: no valid mission"'. Without refusals: the vehicle's warnings
+    (failsafes), e.g. 'vehicle says: "Failsafe: ..."'.
+    """
+    parts: list[str] = []
+    seen: set[str] = set()
+    for r in report.refusals:
+        if r.label in seen:
+            continue
+        seen.add(r.label)
+        texts = [t for ms, _sev, t in report.status_log if r.sent_ms <= ms <= r.ack_ms + STATUS_WINDOW_MS]
+        part = f"vehicle refused {r.label} (COMMAND_ACK {r.result})"
+        parts.append(f"{part}: {_quoted(texts)}" if texts else part)
+    if parts:
+        return "; ".join(parts)
+    start = report.start_ms if report.start_ms is not None else 0
+    warnings = [t for ms, sev, t in report.status_log if sev <= WARNING_SEVERITY and ms >= start]
+    return f"vehicle says: {_quoted(warnings[-3:])}" if warnings else None
 
 
 class Analysis:
@@ -76,6 +112,27 @@ def analyse(
             metrics=online_metrics(report),
             sim_time=report.sim_time,
             wall_time=wall_time,
+            warnings=warnings,
+        )
+        return Analysis(result, trajectory)
+
+    warnings = simulator_warnings(spec)
+    for w in warnings:
+        log.warning("%s", w)
+
+    def refused() -> Analysis:
+        """The vehicle refused to arm: no flight and (usually) no log — the vehicle's doing."""
+        reason = NEVER_TOOK_OFF + ": " + (vehicle_reason(report) or "the vehicle refused to arm")
+        log.info("verdict fail: %s", reason)
+        result = ReplicaResult(
+            index=index,
+            seed=seed,
+            verdict=Verdict.FAIL,
+            reason=reason,
+            metrics=FlightMetrics(flight_time=0.0),
+            sim_time=report.sim_time,
+            wall_time=wall_time,
+            warnings=warnings,
         )
         return Analysis(result, trajectory)
 
@@ -90,6 +147,8 @@ def analyse(
             read_error = f"log unreadable: {e}"
     if report.error:
         return error(report.error, trajectory)
+    if report.ending is Ending.REFUSED and (ulog is None or trajectory is None or not len(trajectory)):
+        return refused()
     if log_path is None:
         return error(log_error or "log missing")
     if ulog is None or trajectory is None:
@@ -104,7 +163,11 @@ def analyse(
         mission=mission_progress_from_ulog(ulog),
         reference=reference,
         crash=crash_reported(ulog),
+        commands=flight_commands(spec),
+        refusal=vehicle_reason(report),
     )
+    if report.ending is Ending.REFUSED and verdict is Verdict.PASS:
+        return refused()
     log.info("verdict %s%s", verdict, f": {reason}" if reason else "")
     return Analysis(
         ReplicaResult(
@@ -116,6 +179,7 @@ def analyse(
             metrics=metrics,
             sim_time=report.sim_time,
             wall_time=wall_time,
+            warnings=warnings,
         ),
         trajectory,
     )

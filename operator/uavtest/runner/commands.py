@@ -6,8 +6,10 @@ effect at once. Aerialist semantics: ``mode mission`` or ``mode takeoff`` while 
 first. While sticks are active MANUAL_CONTROL goes out every ``stick_period_ms`` of vehicle time;
 a switch to a mode that flies by itself (mission, hold, return, land, takeoff) or a disarm ends
 them. A refused arm is retried every second of vehicle time (PX4 refuses until its preflight
-checks pass) for ``arm_give_up_s``; other refusals are noted and the flight goes on (the vehicle
-decided — the verdict will tell); no ACK at all, or UNSUPPORTED, is a bench error.
+checks pass) for ``arm_give_up_s``, then the scheduler gives up (``gave_up``: the vehicle refused
+to fly); other refusals (DENIED, TEMPORARILY_REJECTED, FAILED) are recorded in ``refusals`` and the
+flight goes on (the vehicle decided — the verdict will tell); no ACK at all, or UNSUPPORTED, is a
+bench error (``error``; for UNSUPPORTED worded by ``unsupported_reason``).
 
 Arm settle (``arm_settle_ms``, 0 = off): PX4's pre-arm checks pass while its estimator is still
 settling, and a takeoff commanded at that moment can stall a metre above the ground. With a settle
@@ -39,14 +41,17 @@ from uavtest.spec.models import Command, CommandAction, FlightMode, Sticks
 
 __all__ = [
     "CommandScheduler",
+    "Refusal",
     "Step",
     "StepKind",
     "arm_command",
+    "command_name",
     "disarm_command",
     "expand",
     "manual_control",
     "mode_command",
     "speed_command",
+    "unsupported_reason",
 ]
 
 log = logging.getLogger(__name__)
@@ -67,6 +72,38 @@ class Step:
     command: CommandLong | None = None  # None for sticks
     mode: FlightMode | None = None
     sticks: ManualControl | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Refusal:
+    """The vehicle refused a step: COMMAND_ACK DENIED / TEMPORARILY_REJECTED / FAILED."""
+
+    label: str  # the step, e.g. "mode offboard", "arm (for mode mission)"
+    result: str  # the MAV_RESULT name, e.g. "DENIED"
+    sent_ms: int  # vehicle time the step was (last) sent
+    ack_ms: int  # vehicle time of the refusing ACK
+    final: bool = True  # False: an arm refusal that is being retried
+
+
+def command_name(command: int) -> str:
+    """``MAV_CMD_DO_ORBIT``-style name of a MAV_CMD number (the number when unknown)."""
+    try:
+        return f"MAV_CMD_{Cmd(command).name}"
+    except ValueError:
+        return f"MAV_CMD {command}"
+
+
+def unsupported_reason(what: str, simulator: str | None) -> str:
+    """The bench error for a command the vehicle answered MAV_RESULT_UNSUPPORTED.
+
+    ``what``: "mode offboard" or "MAV_CMD_DO_ORBIT"; ``simulator``: "builtin", "px4" or None
+    (a vehicle of unknown kind).
+    """
+    if simulator == "builtin":
+        return f"the built-in simulator does not support {what}; fly this test with simulator: px4"
+    if simulator == "px4":
+        return f"PX4 does not support {what}"
+    return f"the vehicle does not support {what} (COMMAND_ACK UNSUPPORTED)"
 
 
 def arm_command() -> CommandLong:
@@ -129,6 +166,7 @@ class CommandScheduler:
         arm_give_up_ms: int = 60_000,
         arm_settle_ms: int = 0,
         stick_period_ms: int = 50,
+        simulator: str | None = None,
     ) -> None:
         self._pending = deque(sorted(commands, key=lambda c: c.at))
         self._steps: deque[Step] = deque()
@@ -138,8 +176,12 @@ class CommandScheduler:
         self.arm_give_up_ms = arm_give_up_ms
         self.arm_settle_ms = arm_settle_ms
         self.stick_period_ms = stick_period_ms
+        self.simulator = simulator  # "builtin" / "px4" / None: how UNSUPPORTED is worded
         self.error: str | None = None
         self.notes: list[str] = []  # refusals the vehicle made; shown in the log and the result
+        self.refusals: list[Refusal] = []  # the same, structured (for the verdict's reason)
+        self.gave_up: Refusal | None = None  # an arm refused until arm_give_up_ms: no flight
+        self._sent_ms = 0  # vehicle time the current step was last sent
         self.sent: list[tuple[int, str]] = []  # (vehicle ms, label) of every step started
         self.sticks: ManualControl | None = None
         self._last_stick_ms = -math.inf
@@ -245,6 +287,7 @@ class CommandScheduler:
             self.sticks = None
         assert step.command is not None
         self._current = step
+        self._sent_ms = now_ms
         self._confirmation = 0
         self._first_refusal_ms = None
         self._retry_at_ms = None
@@ -269,6 +312,7 @@ class CommandScheduler:
                 self._retry_at_ms = None
                 return self._send(step, now_ms, wall)
             self._retry_at_ms = None
+            self._sent_ms = now_ms
             self._confirmation = 0
             self._ack_deadline = wall + self.ack_timeout_s
             return [step.command]
@@ -291,6 +335,8 @@ class CommandScheduler:
             return None
         result = ack.result
         if result == AckResult.ACCEPTED:
+            if self._retrying_refusal():
+                self.refusals.pop()  # the vehicle armed in the end
             if step.kind is StepKind.MODE and step.mode in AUTO_MODES:
                 self.sticks = None
             self._done()
@@ -300,15 +346,28 @@ class CommandScheduler:
             return None
         name = result_name(AckResult, result)
         if result == AckResult.UNSUPPORTED:
-            self.error = f"vehicle does not support {step.label} (COMMAND_ACK {name})"
+            what = step.label if step.kind is StepKind.MODE else command_name(ack.command)
+            self.error = unsupported_reason(what, self.simulator)
             self._done()
             return None
         if step.kind is StepKind.ARM:
             if self._first_refusal_ms is None:
                 self._first_refusal_ms = now_ms
+            refusal = Refusal(step.label, name, self._sent_ms, now_ms, final=False)
+            if self._retrying_refusal():
+                self.refusals[-1] = refusal  # one entry per refused arm, however often retried
+            else:
+                self.refusals.append(refusal)
             if now_ms - self._first_refusal_ms >= self.arm_give_up_ms:
                 given = f"{self.arm_give_up_ms / 1000:g} s"
-                self.error = f"vehicle refused to arm for {given} (COMMAND_ACK {name})"
+                note = (
+                    f"t={now_ms / 1000:.2f} s: vehicle refused {step.label} for {given} (COMMAND_ACK {name})"
+                )
+                log.warning(note)
+                self.notes.append(note)
+                self.gave_up = self.refusals[-1] = Refusal(step.label, name, self._sent_ms, now_ms)
+                self._pending.clear()
+                self._steps.clear()
                 self._done()
                 return None
             log.info("vehicle refused to arm (%s); trying again in %d ms", name, self.arm_retry_ms)
@@ -318,8 +377,12 @@ class CommandScheduler:
         note = f"t={now_ms / 1000:.2f} s: vehicle refused {step.label} (COMMAND_ACK {name})"
         log.warning(note)
         self.notes.append(note)
+        self.refusals.append(Refusal(step.label, name, self._sent_ms, now_ms))
         self._done()
         return None
+
+    def _retrying_refusal(self) -> bool:
+        return bool(self.refusals) and not self.refusals[-1].final
 
     def _done(self) -> None:
         self._current = None

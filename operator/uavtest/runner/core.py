@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 
-from uavtest.runner.commands import CommandScheduler, StepKind, disarm_command
+from uavtest.runner.commands import CommandScheduler, Refusal, StepKind, disarm_command
 from uavtest.runner.events import (
     CommandAck,
     ExtendedSysState,
@@ -75,6 +75,7 @@ class Ending(StrEnum):
     LANDED = "landed"  # armed, flew, disarmed, no command left
     COLLISION = "collision"
     TIMEOUT = "timeout"
+    REFUSED = "refused"  # the vehicle refused to arm until the runner gave up: no flight
     ERROR = "error"  # a bench fault: see FlightReport.error
 
 
@@ -98,6 +99,7 @@ class CoreConfig:
     settle_s: float = 3.0  # wall seconds to wait for the disarm after the verdict is settled
     arm_settle_s: float = 0.0  # vehicle seconds ready-to-arm before arming (0: arm when due)
     download_log: bool = False  # stage 6 over MAVLink (PX4 without a shared log directory)
+    simulator: str | None = None  # "builtin" / "px4" / None (unknown vehicle): wording of UNSUPPORTED
 
 
 @dataclass(slots=True)
@@ -119,6 +121,8 @@ class FlightReport:
     mission_reached: set[int] = field(default_factory=set)
     notes: list[str] = field(default_factory=list)
     status_texts: list[str] = field(default_factory=list)
+    status_log: list[tuple[int, int, str]] = field(default_factory=list)  # (vehicle ms, severity, text)
+    refusals: list[Refusal] = field(default_factory=list)  # commands the vehicle refused
     grants: int = 0
     log_data: bytes | None = None
     flight_wall: tuple[float, float] | None = None  # wall clock at the flight stage's start and end
@@ -144,7 +148,10 @@ class ReplicaCore:
         self.params = ParamSetter(config.params, retry_s=config.retry_s)
         self.uploader = MissionUploader(config.mission, retry_s=config.retry_s)
         self.scheduler = CommandScheduler(
-            config.commands, ack_timeout_s=config.retry_s, arm_settle_ms=round(config.arm_settle_s * 1000)
+            config.commands,
+            ack_timeout_s=config.retry_s,
+            arm_settle_ms=round(config.arm_settle_s * 1000),
+            simulator=config.simulator,
         )
         self.downloader = LogDownloader(retry_s=config.retry_s)
         self._have_local = False
@@ -205,6 +212,7 @@ class ReplicaCore:
         if isinstance(msg, StatusText):
             text = f"t={self.now_ms / 1000:.2f} s: {msg.text}"
             self.report.status_texts.append(text)
+            self.report.status_log.append((self.now_ms, msg.severity, msg.text))
             log.info("vehicle says: %s", text)
             return []
         if isinstance(msg, ParamValue) and self.stage is Stage.PARAMS:
@@ -408,6 +416,8 @@ class ReplicaCore:
             rep.armed_ever = True
         if self.scheduler.error:
             return out + self._settle(Ending.ERROR, wall, error=self.scheduler.error)
+        if self.scheduler.gave_up is not None and not self.armed:
+            return out + self._settle(Ending.REFUSED, wall)
         mon = self.monitor
         if mon.collision is not None:
             c = mon.collision
@@ -426,6 +436,9 @@ class ReplicaCore:
             return out + self._settle(Ending.LANDED, wall)
         assert rep.start_ms is not None
         if now - rep.start_ms >= self.cfg.timeout_s * 1000:
+            if not rep.armed_ever and self.scheduler.refusals:
+                rep.notes.append(f"timeout after {self.cfg.timeout_s:g} s of vehicle time, never armed")
+                return out + self._settle(Ending.REFUSED, wall)  # the vehicle's doing, not the bench's
             if not rep.armed_ever:
                 why = f"timeout: the vehicle never armed in {self.cfg.timeout_s:g} s of vehicle time"
                 return out + self._settle(Ending.ERROR, wall, error=why)
@@ -460,6 +473,7 @@ class ReplicaCore:
         rep.collision = mon.collision
         rep.geofence_violation = mon.geofence_violation
         rep.notes.extend(self.scheduler.notes)
+        rep.refusals = list(self.scheduler.refusals)
 
     def _send_disarm(self, wall: float) -> list[Outgoing]:
         self._settle_tries += 1
@@ -480,7 +494,9 @@ class ReplicaCore:
         out: list[Outgoing] = []
         if self.lockstep and self._waiting_at is not None:
             out.append(self._grant())  # one more step, so the simulator acts on the disarm and closes its log
-        if self.cfg.download_log and self.report.ending is not Ending.ERROR:
+        rep = self.report
+        never_armed_refusal = rep.ending is Ending.REFUSED and not rep.armed_ever  # no log to fetch
+        if self.cfg.download_log and rep.ending is not Ending.ERROR and not never_armed_refusal:
             self.stage = Stage.LOG
             out += self.downloader.start(wall)
         else:

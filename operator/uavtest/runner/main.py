@@ -91,7 +91,7 @@ def _collect_log(opts: RunnerOptions, report: FlightReport, since: float) -> tup
         return Path(tmp.name), None
     if opts.log_dir is None:
         return None, report.error or "log missing: no --log-dir and no log downloaded from the vehicle"
-    if report.ending is Ending.ERROR and not report.armed_ever:
+    if report.ending in (Ending.ERROR, Ending.REFUSED) and not report.armed_ever:
         return None, "log missing: the vehicle never armed, so its log never closed"
     try:
         return wait_for_log(opts.log_dir, since=since, timeout_s=opts.log_timeout), None

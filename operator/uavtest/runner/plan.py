@@ -54,6 +54,7 @@ def plan_flight(
         step_ms=step_ms,
         download_log=download_log,
         arm_settle_s=arm_settle_s if arm_settle_s is not None else default_arm_settle(spec),
+        simulator=spec.vehicle.simulator.value,
     )
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -18,7 +19,7 @@ def warm() -> WarmLauncher:
 
 
 def _cli(*args: str) -> list[str]:
-    return [sys.executable, "-m", "uavtest.cli", *args]
+    return [sys.executable, "-m", "uavtest.engine.entry", *args]
 
 
 @pytest.mark.parametrize("launcher", [ExecLauncher(), "warm"])
@@ -27,11 +28,14 @@ def test_exit_codes_and_output_files_match_exec(
 ) -> None:
     start = warm.start if launcher == "warm" else launcher.start  # type: ignore[union-attr]
     out, err = tmp_path / "out.log", tmp_path / "err.log"
-    ok = start(_cli("run", "--help"), stdout=out, stderr=err)
+    ok = start(_cli("runner", "--help"), stdout=out, stderr=err)
     assert ok.wait(timeout=60) == 0
-    assert "--replicas" in out.read_text()
+    assert "--run-id" in out.read_text()
 
-    bad = start(_cli("run", str(tmp_path / "absent.yaml"), "--out", str(tmp_path)), stdout=out, stderr=err)
+    absent = str(tmp_path / "absent.yaml")
+    bad = start(
+        _cli("runner", "--test", absent, "--store", str(tmp_path), "--run-id", "r"), stdout=out, stderr=err
+    )
     assert bad.wait(timeout=60) == 2
     assert "absent.yaml" in err.read_text()
 
@@ -64,4 +68,17 @@ def test_a_forked_simulator_is_stopped_cleanly(warm: WarmLauncher, tmp_path: Pat
 def test_only_uavtest_cli_commands_are_forked() -> None:
     assert is_uavtest_cli(_cli("runner"))
     assert not is_uavtest_cli([sys.executable, "-c", "pass"])
+    assert not is_uavtest_cli(
+        [sys.executable, "-m", "uavtest.cli", "runner"]
+    )  # the engine never runs the CLI
     assert not is_uavtest_cli(["/opt/px4/bin/px4", "-i", "0"])
+
+
+def test_the_engine_does_not_import_the_cli() -> None:
+    """The replica processes have their own entry point: nothing under engine imports uavtest.cli."""
+    code = (
+        "import sys, uavtest.engine.launch, uavtest.engine.replica, uavtest.engine.local;"
+        "import uavtest.engine.entry;"
+        "sys.exit('uavtest.cli' in sys.modules)"
+    )
+    assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0

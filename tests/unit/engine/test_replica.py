@@ -200,9 +200,9 @@ def test_process_plan_follows_the_process_contract(tmp_path: Path) -> None:
     job = _job(tmp_path)
     plan = plan_processes(job, ReplicaPorts(api=21000, gcs=21001), tmp_path / "logs")
     sim, runner = " ".join(plan.sim), " ".join(plan.runner)
-    assert "uavtest.cli sitl" in sim and "--lockstep" in sim and "--seed 42" in sim
+    assert "uavtest.engine.entry sitl" in sim and "--lockstep" in sim and "--seed 42" in sim
     assert "--api-port 21000" in sim and "--gcs-port 21001" in sim and f"--log-dir {tmp_path / 'logs'}" in sim
-    assert "uavtest.cli runner" in runner and "--connect udpin:127.0.0.1:21000" in runner
+    assert "uavtest.engine.entry runner" in runner and "--connect udpin:127.0.0.1:21000" in runner
     assert "--replica 2" in runner and "--seed 42" in runner and "--run-id r1" in runner
     assert f"--store {tmp_path / 'store'}" in runner and "--namespace local" in runner
 

@@ -6,7 +6,8 @@ import math
 from pathlib import Path
 
 from uavtest.analysis.models import Verdict
-from uavtest.runner.analyse import analyse
+from uavtest.runner.analyse import analyse, vehicle_reason
+from uavtest.runner.commands import Refusal
 from uavtest.runner.core import Ending, FlightReport
 from uavtest.spec.models import UavTestSpec
 
@@ -68,3 +69,60 @@ def test_an_unreadable_log_is_an_error(tmp_path: Path) -> None:
     report.min_distance = math.inf
     a = analyse(report, bad, spec, index=0, seed=0)
     assert a.result.verdict is Verdict.ERROR and a.result.reason.startswith("log unreadable")
+
+
+# --------------------------------------------------------------------------- no silent pass
+
+OFFBOARD = {
+    "commands": [{"at": 1, "action": "arm"}, {"at": 2, "action": "mode", "mode": "offboard"}],
+    "world": {"obstacles": [{"size": {"l": 2, "w": 2, "h": 10}, "position": {"x": 20, "y": 0}}]},
+}
+
+
+def refused_report(label: str, result: str, texts: list[tuple[int, int, str]], **kw: object) -> FlightReport:
+    rep = FlightReport(ending=Ending.LANDED, start_ms=1_000, end_ms=12_000, armed_ever=True)
+    rep.refusals = [Refusal(label, result, sent_ms=2_000, ack_ms=2_000)]
+    rep.status_log = texts
+    for k, v in kw.items():
+        setattr(rep, k, v)
+    return rep
+
+
+def test_vehicle_reason_quotes_the_statustexts_of_the_refusal() -> None:
+    texts = [
+        (1_450, 6, "Ready for takeoff!"),
+        (2_000, 2, "Arming denied: no valid mission"),
+        (9_000, 2, "late"),
+    ]
+    rep = refused_report("arm", "DENIED", texts)
+    assert (
+        vehicle_reason(rep) == 'vehicle refused arm (COMMAND_ACK DENIED): "Arming denied: no valid mission"'
+    )
+    rep.status_log = []
+    assert vehicle_reason(rep) == "vehicle refused arm (COMMAND_ACK DENIED)"
+
+
+def test_vehicle_reason_without_refusals_is_the_vehicles_warnings_or_none() -> None:
+    rep = FlightReport(start_ms=1_000)
+    rep.status_log = [(500, 2, "before the flight"), (1_500, 6, "info"), (3_000, 1, "Failsafe: no RC")]
+    assert vehicle_reason(rep) == 'vehicle says: "Failsafe: no RC"'
+    assert vehicle_reason(FlightReport(start_ms=0)) is None
+
+
+def test_a_refused_arm_is_fail_with_the_vehicles_reason_even_without_a_log() -> None:
+    spec = UavTestSpec.model_validate(OFFBOARD)
+    rep = refused_report("arm", "DENIED", [(2_000, 2, "Arming denied: no valid mission")], armed_ever=False)
+    rep.ending = Ending.REFUSED
+    a = analyse(rep, None, spec, index=0, seed=3, log_error="log missing: the vehicle never armed")
+    assert a.result.verdict is Verdict.FAIL
+    assert a.result.reason == (
+        "the vehicle never took off: "
+        'vehicle refused arm (COMMAND_ACK DENIED): "Arming denied: no valid mission"'
+    )
+    assert a.result.metrics is not None and a.result.metrics.flight_time == 0.0
+
+
+def test_px4_limits_are_warnings_in_the_result() -> None:
+    spec = UavTestSpec.model_validate({**OFFBOARD, "vehicle": {"simulator": "px4"}})
+    a = analyse(flown(), None, spec, index=0, seed=0, log_error="log missing")
+    assert a.result.warnings and "PX4 SITL (SIH) has no obstacles" in a.result.warnings[0]

@@ -4,12 +4,17 @@ from __future__ import annotations
 
 import itertools
 
+import pytest
+
 from uavtest.runner.commands import (
     CommandScheduler,
+    Refusal,
     arm_command,
+    command_name,
     disarm_command,
     mode_command,
     speed_command,
+    unsupported_reason,
 )
 from uavtest.runner.events import CommandAck, CommandLong, ManualControl
 from uavtest.runner.px4 import AckResult, Cmd, custom_mode, mode_name
@@ -67,8 +72,22 @@ def test_a_refused_arm_is_retried_every_second_of_vehicle_time_then_given_up() -
     assert s.update(1010, 5.0, armed=False) == [arm_command()]
     s.handle_ack(CommandAck(ARM, AckResult.DENIED), 1020, 5.0)
     assert s.update(2020, 5.0, armed=False) == [arm_command()]
+    assert len(s.refusals) == 1 and not s.refusals[0].final  # one entry while retried
     s.handle_ack(CommandAck(ARM, AckResult.DENIED), 3010, 5.0)
-    assert s.error == "vehicle refused to arm for 3 s (COMMAND_ACK DENIED)"
+    # the vehicle refused: not a bench error, the flight is over (no flight), the verdict will say why
+    assert s.error is None
+    assert s.gave_up == Refusal("arm", "DENIED", sent_ms=2020, ack_ms=3010)
+    assert s.refusals == [s.gave_up] and s.idle
+    assert "vehicle refused arm for 3 s (COMMAND_ACK DENIED)" in s.notes[-1]
+
+
+def test_an_arm_accepted_after_refusals_leaves_no_refusal() -> None:
+    s = CommandScheduler([cmd(0, "arm")], arm_retry_ms=1000)
+    s.update(0, 0.0, armed=False)
+    s.handle_ack(CommandAck(ARM, AckResult.TEMPORARILY_REJECTED), 10, 0.0)
+    s.update(1010, 1.0, armed=False)
+    s.handle_ack(CommandAck(ARM, AckResult.ACCEPTED), 1020, 1.0)
+    assert s.refusals == [] and s.gave_up is None and s.error is None
 
 
 def test_a_command_without_ack_is_resent_with_a_rising_confirmation_then_is_an_error() -> None:
@@ -82,14 +101,64 @@ def test_a_command_without_ack_is_resent_with_a_rising_confirmation_then_is_an_e
     assert s.error == "no COMMAND_ACK for mode hold after 3 tries"
 
 
-def test_an_unsupported_command_is_a_bench_error_and_a_denied_mode_a_note() -> None:
+def test_an_unsupported_command_is_a_bench_error_and_a_denied_mode_a_refusal() -> None:
     s = CommandScheduler([cmd(0, "mode", mode="offboard"), cmd(1, "speed", speed=2)])
     s.update(0, 0.0, armed=True)
     s.handle_ack(CommandAck(MODE, AckResult.DENIED), 0, 0.0)
     assert s.error is None and "refused mode offboard" in s.notes[0]
+    assert s.refusals == [Refusal("mode offboard", "DENIED", sent_ms=0, ack_ms=0)]
     s.update(1000, 0.0, armed=True)
     s.handle_ack(CommandAck(Cmd.DO_CHANGE_SPEED, AckResult.UNSUPPORTED), 1000, 0.0)
-    assert s.error == "vehicle does not support speed 2 (COMMAND_ACK UNSUPPORTED)"
+    assert s.error == "the vehicle does not support MAV_CMD_DO_CHANGE_SPEED (COMMAND_ACK UNSUPPORTED)"
+
+
+@pytest.mark.parametrize(
+    ("simulator", "step", "command", "reason"),
+    [
+        (
+            "builtin",
+            cmd(0, "mode", mode="offboard"),
+            MODE,
+            "the built-in simulator does not support mode offboard; fly this test with simulator: px4",
+        ),
+        (
+            "builtin",
+            cmd(0, "speed", speed=3),
+            Cmd.DO_CHANGE_SPEED,
+            "the built-in simulator does not support MAV_CMD_DO_CHANGE_SPEED; "
+            "fly this test with simulator: px4",
+        ),
+        ("px4", cmd(0, "mode", mode="offboard"), MODE, "PX4 does not support mode offboard"),
+    ],
+)
+def test_unsupported_is_a_bench_error_naming_the_simulator_and_the_command(
+    simulator: str, step: Command, command: int, reason: str
+) -> None:
+    """A fake ACK stream: the vehicle answers MAV_RESULT_UNSUPPORTED to the command."""
+    s = CommandScheduler([step, cmd(5, "disarm")], simulator=simulator)
+    (sent,) = s.update(0, 0.0, armed=True)
+    assert isinstance(sent, CommandLong) and sent.command == command
+    s.handle_ack(CommandAck(command, AckResult.UNSUPPORTED), 0, 0.0)
+    assert s.error == reason
+    assert s.update(6000, 1.0, armed=True) == []  # nothing more is sent after a bench error
+
+
+def test_unsupported_names_any_mav_cmd() -> None:
+    assert command_name(34) == "MAV_CMD 34"  # MAV_CMD_DO_ORBIT: no name in our table
+    assert command_name(Cmd.COMPONENT_ARM_DISARM) == "MAV_CMD_COMPONENT_ARM_DISARM"
+    assert unsupported_reason("MAV_CMD_DO_ORBIT", "builtin") == (
+        "the built-in simulator does not support MAV_CMD_DO_ORBIT; fly this test with simulator: px4"
+    )
+    assert unsupported_reason("MAV_CMD_DO_ORBIT", "px4") == "PX4 does not support MAV_CMD_DO_ORBIT"
+
+
+@pytest.mark.parametrize("result", [AckResult.DENIED, AckResult.TEMPORARILY_REJECTED, AckResult.FAILED])
+def test_every_refusal_of_a_mode_is_recorded_not_an_error(result: AckResult) -> None:
+    s = CommandScheduler([cmd(2, "mode", mode="position")])
+    s.update(2000, 0.0, armed=True)
+    s.handle_ack(CommandAck(MODE, result), 2010, 0.0)
+    assert s.error is None and s.idle
+    assert s.refusals == [Refusal("mode position", result.name, sent_ms=2000, ack_ms=2010)]
 
 
 def test_sticks_stream_at_20_hz_of_vehicle_time_until_an_auto_mode() -> None:

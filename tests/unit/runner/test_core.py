@@ -152,14 +152,29 @@ def test_a_vehicle_that_never_arms_is_a_bench_error_at_the_timeout() -> None:
     assert core.report.error == "timeout: the vehicle never armed in 2 s of vehicle time"
 
 
-def test_a_refused_arm_for_too_long_is_a_bench_error_with_the_ack() -> None:
+def test_a_refused_arm_for_too_long_ends_the_flight_as_refused_not_a_bench_error() -> None:
     core = ReplicaCore(config())
     core.scheduler.arm_give_up_ms = 2000
     vehicle = ScriptedVehicle(refuse_arm=True)
     core.start(0.0)
     exchange(core, vehicle, [*boot(0), LockstepAnnounce(0)], wall=0.1)
     fly_lockstep(core, vehicle, [(0.0, 0.0, 0.0)], land_after=10**6)
-    assert core.report.error == "vehicle refused to arm for 2 s (COMMAND_ACK DENIED)"
+    rep = core.report
+    assert core.done and rep.ending is Ending.REFUSED and rep.error is None
+    assert [(r.label, r.result, r.final) for r in rep.refusals] == [
+        ("arm (for mode mission)", "DENIED", True)
+    ]
+    assert any("vehicle refused arm (for mode mission) for 2 s (COMMAND_ACK DENIED)" in n for n in rep.notes)
+
+
+def test_a_refused_arm_at_the_timeout_is_refused_not_a_bench_error() -> None:
+    core = ReplicaCore(config(timeout_s=3.0))  # the test's timeout comes before the arm give-up
+    vehicle = ScriptedVehicle(refuse_arm=True)
+    core.start(0.0)
+    exchange(core, vehicle, [*boot(0), LockstepAnnounce(0)], wall=0.1)
+    fly_lockstep(core, vehicle, [(0.0, 0.0, 0.0)], land_after=10**6)
+    assert core.done and core.report.ending is Ending.REFUSED and core.report.error is None
+    assert core.report.refusals and core.report.refusals[0].result == "DENIED"
 
 
 def test_without_announces_the_core_follows_the_vehicle_clock_and_never_grants() -> None:
@@ -247,3 +262,14 @@ def test_a_stale_disarmed_heartbeat_right_after_arming_does_not_end_the_flight()
     assert core.stage is Stage.FLIGHT  # sent before the arm took effect: not a landing
     fly_lockstep(core, vehicle, [(0.0, 0.0, -3.0)], land_after=10**6)
     assert core.report.ending is Ending.TIMEOUT and core.report.armed_ever
+
+
+def test_a_refused_arm_downloads_no_log_the_vehicle_never_wrote() -> None:
+    core = ReplicaCore(config(download_log=True))
+    core.scheduler.arm_give_up_ms = 2000
+    vehicle = ScriptedVehicle(refuse_arm=True)
+    core.start(0.0)
+    exchange(core, vehicle, [*boot(0), LockstepAnnounce(0)], wall=0.1)
+    fly_lockstep(core, vehicle, [(0.0, 0.0, 0.0)], land_after=10**6)
+    assert core.done and core.report.ending is Ending.REFUSED
+    assert core.report.error is None and core.report.log_data is None
