@@ -18,14 +18,7 @@ import random
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
-from uavtest.sitl import mav
-from uavtest.sitl import ulog_topics as topics
-from uavtest.sitl.controller import Controller, Goal, GoalKind, Limits
-from uavtest.sitl.estimator import Estimator
-from uavtest.sitl.geo import Projection
-from uavtest.sitl.mav import LandedState, MavCmd, MavResult, MavSeverity, MavState, Msg, ParamType
-from uavtest.sitl.mission import NavItem
-from uavtest.sitl.modes import (
+from uavtest.px4.modes import (
     ARMING_STATE_ARMED,
     ARMING_STATE_DISARMED,
     AUTO_NAV_STATES,
@@ -34,7 +27,15 @@ from uavtest.sitl.modes import (
     base_mode_flags,
     custom_mode,
     nav_state_from_custom_mode,
+    split_custom_mode,
 )
+from uavtest.sitl import mav
+from uavtest.sitl import ulog_topics as topics
+from uavtest.sitl.controller import Controller, Goal, GoalKind, Limits
+from uavtest.sitl.estimator import Estimator
+from uavtest.sitl.geo import Projection
+from uavtest.sitl.mav import LandedState, MavCmd, MavResult, MavSeverity, MavState, Msg, ParamType
+from uavtest.sitl.mission import NavItem
 from uavtest.sitl.navigator import EventKind, Navigator, State
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.physics import GRAVITY, Body, WindModel, World
@@ -222,10 +223,7 @@ class Vehicle:
             return []
         if name == "SET_MODE":
             if msg.get("target_system", 1) in (0, mav.SYSTEM_ID):
-                main, sub = (
-                    (int(msg.get("custom_mode", 0)) >> 16) & 0xFF,
-                    (int(msg.get("custom_mode", 0)) >> 24) & 0xFF,
-                )
+                main, sub = split_custom_mode(int(msg.get("custom_mode", 0)))
                 self._set_mode(nav_state_from_custom_mode(main, sub))
             return []
         if name == "TIMESYNC":
