@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 from uavtest.sitl.params import ParamStore
-from uavtest.sitl.physics import GRAVITY
+from uavtest.sitl.simulator_sih import GRAVITY
 
 __all__ = ["Controller", "Goal", "GoalKind", "Limits", "wrap_pi"]
 
