@@ -7,8 +7,9 @@ messages out), a façade over modules named like PX4's: ``commander/`` (arming c
 tables, vehicle command dispatch), ``navigator/``, ``mc_pos_control`` (flight tasks and position
 control), ``ekf2`` (estimate), ``land_detector``, ``simulator_sih`` (physics, wind, obstacles),
 ``mavlink_streams`` (telemetry) and ``recorder`` (PX4's logger), exchanging the ``uorb`` topic
-dataclasses that the ULog records as they are. ``main.run_sitl`` is the process edge (UDP links, lockstep or speed factor,
-signals, log files, and ``logserver.LogServer`` serving finished logs over MAVLink);
+dataclasses that the ULog records as they are. ``main.run_sitl`` is the process edge (UDP
+links, lockstep or speed factor, signals, log files, and ``logserver.LogServer`` serving
+finished logs over MAVLink);
 ``inprocess.fly_mission`` flies a mission without sockets.
 """
 

@@ -12,7 +12,7 @@ from typing import Protocol
 from uavtest.sitl.mav import ParamType
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.ulog_writer import ULogEncoder
-from uavtest.sitl.uorb import FORMATS, TOPICS, topic_name, ulog_values
+from uavtest.sitl.uorb import FORMATS, RECORD, TOPICS
 
 __all__ = ["FlightRecorder", "LogSink", "MemorySink"]
 
@@ -65,7 +65,8 @@ class FlightRecorder:
         """Record one uORB topic dataclass (``uorb.VehicleStatus(...)``) as it is."""
         if self.active:
             assert self.sink is not None
-            self.sink.write(self._enc.data(topic_name(msg), ulog_values(msg)))
+            name, flatten = RECORD[type(msg)]
+            self.sink.write(self._enc.data(name, flatten(msg)))
 
     def text(self, level: int, t_us: int, text: str) -> None:
         if self.active:

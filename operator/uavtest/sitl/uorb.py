@@ -1,4 +1,4 @@
-"""PX4 uORB topics as plain data: one frozen, slotted dataclass per topic (PX4 ``msg/*.msg``).
+"""PX4 uORB topics as plain data: one slotted dataclass per topic (PX4 ``msg/*.msg``).
 
 The simulator's modules pass these between them, and the flight recorder writes them to the
 ULog as they are: each field carries its ULog type (``ulog("float")``), and the ULog format
@@ -7,17 +7,25 @@ Names, field names, types and field order follow PX4 v1.15 (a subset of fields, 
 so ``pyulog`` and the analysis read our logs exactly like PX4's: e.g.
 ``position_setpoint_triplet`` nests three ``position_setpoint`` and reads back as
 ``current.lat``, ``next.valid`` and so on.
+
+A published topic is never changed (treat it as frozen). The classes are slotted but not
+``frozen=True``: a frozen dataclass builds through ``object.__setattr__`` per field, ~10x slower,
+and ``vehicle_local_position`` (36 fields) is built on every 50 Hz tick. Flat topics are
+flattened by ``operator.attrgetter`` (one tuple, in C), nested and array fields by a generated
+function.
 """
 
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Callable
 from dataclasses import dataclass, field, fields
 from typing import Any, TypeVar
 
 __all__ = [
     "FORMATS",
+    "RECORD",
     "TOPICS",
     "ActuatorArmed",
     "HomePosition",
@@ -69,12 +77,21 @@ def topic(name: str) -> Callable[[type[T]], type[T]]:
             else:
                 parts.append(f"o.{f.name}")
         FORMATS[name] = [f"{f.metadata['ulog']} {f.name}" for f in fields(cls)]  # type: ignore[arg-type]
-        flat_by_name = {n: _FLATTEN[c] for c, n in _NAME.items()}
-        _FLATTEN[cls] = eval(f"lambda o: ({', '.join(parts)},)", {"_flat": flat_by_name})
+        names = [f.name for f in fields(cls)]  # type: ignore[arg-type]
+        if all(p == f"o.{n}" for p, n in zip(parts, names, strict=True)) and len(names) > 1:
+            _FLATTEN[cls] = operator.attrgetter(*names)
+        else:
+            flat_by_name = {n: _FLATTEN[c] for c, n in _NAME.items()}
+            _FLATTEN[cls] = eval(f"lambda o: ({', '.join(parts)},)", {"_flat": flat_by_name})
         _NAME[cls] = name
+        RECORD[cls] = (name, _FLATTEN[cls])
         return cls
 
     return register
+
+
+#: topic dataclass → (uORB name, flattener): what the recorder needs, in one lookup
+RECORD: dict[type, tuple[str, Callable[[Any], tuple[object, ...]]]] = {}
 
 
 def topic_name(msg: object) -> str:
@@ -87,7 +104,7 @@ def ulog_values(msg: object) -> tuple[object, ...]:
 
 
 @topic("position_setpoint")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class PositionSetpoint:
     timestamp: int = ulog("uint64_t")
     lat: float = ulog("double")
@@ -108,7 +125,7 @@ class PositionSetpoint:
 
 
 @topic("vehicle_local_position")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class VehicleLocalPosition:
     timestamp: int = ulog("uint64_t")
     timestamp_sample: int = ulog("uint64_t")
@@ -149,7 +166,7 @@ class VehicleLocalPosition:
 
 
 @topic("vehicle_global_position")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class VehicleGlobalPosition:
     timestamp: int = ulog("uint64_t")
     timestamp_sample: int = ulog("uint64_t")
@@ -165,7 +182,7 @@ class VehicleGlobalPosition:
 
 
 @topic("vehicle_attitude")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class VehicleAttitude:
     timestamp: int = ulog("uint64_t")
     timestamp_sample: int = ulog("uint64_t")
@@ -175,7 +192,7 @@ class VehicleAttitude:
 
 
 @topic("vehicle_status")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class VehicleStatus:
     timestamp: int = ulog("uint64_t")
     armed_time: int = ulog("uint64_t")
@@ -198,7 +215,7 @@ class VehicleStatus:
 
 
 @topic("vehicle_land_detected")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class VehicleLandDetected:
     timestamp: int = ulog("uint64_t")
     freefall: bool = ulog("bool")
@@ -215,7 +232,7 @@ class VehicleLandDetected:
 
 
 @topic("actuator_armed")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class ActuatorArmed:
     timestamp: int = ulog("uint64_t")
     armed: bool = ulog("bool")
@@ -227,7 +244,7 @@ class ActuatorArmed:
 
 
 @topic("vehicle_command")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class VehicleCommand:
     timestamp: int = ulog("uint64_t")
     param5: float = ulog("double")
@@ -247,7 +264,7 @@ class VehicleCommand:
 
 
 @topic("vehicle_command_ack")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class VehicleCommandAck:
     timestamp: int = ulog("uint64_t")
     command: int = ulog("uint32_t")
@@ -260,7 +277,7 @@ class VehicleCommandAck:
 
 
 @topic("position_setpoint_triplet")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class PositionSetpointTriplet:
     timestamp: int = ulog("uint64_t")
     previous: PositionSetpoint = field(metadata={"ulog": "position_setpoint"})
@@ -269,7 +286,7 @@ class PositionSetpointTriplet:
 
 
 @topic("mission_result")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class MissionResult:
     timestamp: int = ulog("uint64_t")
     mission_id: int = ulog("uint32_t")
@@ -289,7 +306,7 @@ class MissionResult:
 
 
 @topic("manual_control_setpoint")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class ManualControlSetpoint:
     timestamp: int = ulog("uint64_t")
     timestamp_sample: int = ulog("uint64_t")
@@ -307,7 +324,7 @@ class ManualControlSetpoint:
 
 
 @topic("home_position")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class HomePosition:
     timestamp: int = ulog("uint64_t")
     lat: float = ulog("double")
@@ -325,7 +342,7 @@ class HomePosition:
 
 
 @topic("trajectory_setpoint")
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class TrajectorySetpoint:
     timestamp: int = ulog("uint64_t")
     position: tuple[float, float, float] = ulog("float[3]")
