@@ -337,28 +337,28 @@ def run_sitl(
     when its parent process dies (the engine that started it is gone).
     """
     _check_args(speed_factor, idle_exit_s)
-    config = load_config(test, seed)
-    sink = FileLogSink(log_dir, seed)
-    vehicle = Vehicle(config, sink)
-    local_api = api_port + 40 if api_local_port is None else api_local_port
-    links = [
-        Link("api", _bind(host, local_api), (host, api_port)),
-        Link("gcs", _bind(host, gcs_local_port), (host, gcs_port), always_stream=False),
-    ]
-    edge = _Edge(vehicle, links, LogServer(lambda: sink.closed), lockstep)
-    log.info(
-        "uavtest sitl: pid %d seed %d, API %s:%d -> %s:%d, GCS %d -> %d, %s",
-        os.getpid(),
-        seed,
-        host,
-        local_api,
-        host,
-        api_port,
-        gcs_local_port,
-        gcs_port,
-        "lockstep" if lockstep else f"speed factor {speed_factor:g}",
-    )
-    with _signals() as (stop, wakeup):
+    with _signals() as (stop, wakeup):  # before the log file appears: a SIGTERM from then on closes it
+        config = load_config(test, seed)
+        sink = FileLogSink(log_dir, seed)
+        vehicle = Vehicle(config, sink)
+        local_api = api_port + 40 if api_local_port is None else api_local_port
+        links = [
+            Link("api", _bind(host, local_api), (host, api_port)),
+            Link("gcs", _bind(host, gcs_local_port), (host, gcs_port), always_stream=False),
+        ]
+        edge = _Edge(vehicle, links, LogServer(lambda: sink.closed), lockstep)
+        log.info(
+            "uavtest sitl: pid %d seed %d, API %s:%d -> %s:%d, GCS %d -> %d, %s",
+            os.getpid(),
+            seed,
+            host,
+            local_api,
+            host,
+            api_port,
+            gcs_local_port,
+            gcs_port,
+            "lockstep" if lockstep else f"speed factor {speed_factor:g}",
+        )
         watch = _Watch(idle_exit_s or None) if lockstep else None
         ended = ""
         try:

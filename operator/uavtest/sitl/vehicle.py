@@ -2,10 +2,11 @@
 and clock ticks, with no I/O (h11 style).
 
 Modules (named like PX4's ``src/modules``): ``simulator_sih`` (physics, wind, obstacles),
-``ekf2`` (estimate), ``land_detector``, ``commander`` (arming checks, failsafe tables, vehicle
-command dispatch), ``navigator`` (mission, hold, takeoff, land, return), ``mc_pos_control``
-(flight tasks and position control), ``mavlink_streams`` (telemetry builders) and the
-``recorder`` (logger), exchanging ``uorb`` topic dataclasses that the ULog records as they are.
+``ekf2`` (estimate), ``land_detector``, ``commander`` (state machine, arming checks, failsafe
+tables, vehicle command dispatch), ``navigator`` (mission, hold, takeoff, land, return),
+``mc_pos_control`` (flight tasks and position control), ``mavlink_streams`` (telemetry
+builders) and the ``recorder`` (logger), exchanging ``uorb`` topic dataclasses that the ULog
+records as they are.
 
 - ``receive(msg)`` handles one inbound message and returns the direct replies (for the link it
   came from); ``advance(until_us)`` runs the simulation up to a vehicle time; ``drain()``
@@ -25,9 +26,6 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 from uavtest.px4.modes import (
-    ARMING_STATE_ARMED,
-    ARMING_STATE_DISARMED,
-    AUTO_NAV_STATES,
     MANUAL_NAV_STATES,
     NavState,
     nav_state_from_custom_mode,
@@ -35,27 +33,20 @@ from uavtest.px4.modes import (
 )
 from uavtest.sitl import mav
 from uavtest.sitl import uorb as topics
-from uavtest.sitl.commander.arming import Reason, arming_denied
-from uavtest.sitl.commander.failsafe import (
-    ACTION_NAV_STATE,
-    DATA_LINK_LOST,
-    MANUAL_CONTROL_LOST,
-    Condition,
-    NavAction,
-)
+from uavtest.sitl.commander.commander import Commander
 from uavtest.sitl.commander.vehicle_command import handle_command
 from uavtest.sitl.ekf2 import Estimator
 from uavtest.sitl.geo import Projection
-from uavtest.sitl.land_detector import LandDetector, Transition
-from uavtest.sitl.mav import LandedState, MavResult, MavSeverity, Msg, ParamType
-from uavtest.sitl.mavlink_streams import STREAMS, SW_VERSION, home_position
-from uavtest.sitl.mc_pos_control import Controller, Goal, GoalKind, Limits
+from uavtest.sitl.land_detector import LandDetector
+from uavtest.sitl.mav import LandedState, MavSeverity, Msg, ParamType
+from uavtest.sitl.mavlink_streams import STREAMS, SW_VERSION
+from uavtest.sitl.mc_pos_control import IDLE, Controller, Goal, GoalKind, Limits
 from uavtest.sitl.mission import NavItem
 from uavtest.sitl.navigator import EventKind, Navigator, State
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
-from uavtest.sitl.simulator_sih import GRAVITY, Body, WindModel, World
+from uavtest.sitl.simulator_sih import Body, WindModel, World
 from uavtest.sitl.telemetry import Schedule
 from uavtest.sitl.ulog_writer import LOG_LEVEL
 from uavtest.spec.models import Home, Obstacle, UavTestSpec, Wind
@@ -65,10 +56,8 @@ __all__ = ["STEP_US", "SimConfig", "Vehicle"]
 STEP_US = 4_000  # 250 Hz physics
 CONTROL_EVERY = 5  # 50 Hz control
 CONTROL_DT = STEP_US * CONTROL_EVERY / 1e6
-READY_US = 1_500_000  # estimator converged, home set
 
 _NEEDS_FIX = frozenset({"GLOBAL_POSITION_INT", "HOME_POSITION"})  # PX4 sends them once it has a fix
-_IDLE = (0.0, 0.0, GRAVITY, 0.0)
 _SETPOINT_TYPE = {
     GoalKind.POSITION: topics.SETPOINT_TYPE_POSITION,
     GoalKind.TAKEOFF: topics.SETPOINT_TYPE_TAKEOFF,
@@ -141,36 +130,28 @@ class Vehicle:
         self.time_us = 0
         self._next_us = STEP_US
         self._tick = 0
-        self._cmd = _IDLE
+        self._cmd = IDLE
         self._out: list[Msg] = []
-        # commander state (vehicle_status)
-        self.armed = False
-        self.armed_at_us = 0
-        self.nav_state = NavState.AUTO_LOITER
-        self.user_nav_state = NavState.AUTO_LOITER
-        self.nav_state_us = 0
-        self.arming_reason = 0
-        self.disarming_reason = 0
-        self.crashed = False
-        self.crash_obstacle: int | None = None
-        self.failsafe = False
-        self.gcs_lost = False
-        self.ready = False
-        self.home_set = False
-        self.home = (0.0, 0.0, 0.0, config.home.lat, config.home.lon, config.home.alt, 0.0)
-        self._home_count = 0
-        self._last_gcs_us: int | None = None
-        self._sticks = (0.0, 0.0, 0.5, 0.0)
-        self._sticks_us: int | None = None
-        self._close_log = False
         self.goal = Goal()
         self.st = State()
-        self._status_dirty = True
+        self.commander = Commander(self)
         self.recorder.start(0, self.params)
         self._estimate()
         self._control_tick(0)
 
-    # ------------------------------------------------------------------ land detector state
+    # ------------------------------------------------------------------ module state, read-only
+
+    armed = property(lambda self: self.commander.armed)
+    armed_at_us = property(lambda self: self.commander.armed_at_us)
+    nav_state = property(lambda self: self.commander.nav_state)
+    user_nav_state = property(lambda self: self.commander.user_nav_state)
+    crashed = property(lambda self: self.commander.crashed)
+    crash_obstacle = property(lambda self: self.commander.crash_obstacle)
+    failsafe = property(lambda self: self.commander.failsafe)
+    gcs_lost = property(lambda self: self.commander.gcs_lost)
+    ready = property(lambda self: self.commander.ready)
+    home_set = property(lambda self: self.commander.home_set)
+    home = property(lambda self: self.commander.home)
 
     @property
     def landed(self) -> bool:
@@ -207,15 +188,16 @@ class Vehicle:
         body = self.body
         wind = self.wind
         world = self.world
+        commander = self.commander
         dt = STEP_US / 1e6
         while self._next_us <= until_us:
             t = self._next_us
             ax, ay, az, yr = self._cmd
             body.step(dt, ax, ay, az, yr, wind.n, wind.e, wind.d)
-            if world.near and not self.crashed and not body.on_ground:
+            if world.near and not commander.crashed and not body.on_ground:
                 hit = world.hit(body.x, body.y, body.z)
                 if hit is not None:
-                    self._crash(t, hit.index)
+                    commander.crash(t, hit.index)
             self._tick += 1
             self._next_us = t + STEP_US
             if self._tick % CONTROL_EVERY == 0:
@@ -269,10 +251,7 @@ class Vehicle:
 
     def _on_heartbeat(self, msg: Msg) -> list[Msg]:
         if msg.get("type") == mav.MAV_TYPE_GCS:
-            self._last_gcs_us = self.time_us
-            if self.gcs_lost:
-                self.gcs_lost = False
-                self.text(MavSeverity.INFO, "Data link regained")
+            self.commander.gcs_heartbeat(self.time_us)
         return []
 
     def _on_command(self, msg: Msg) -> list[Msg]:
@@ -285,9 +264,8 @@ class Vehicle:
         y = max(-1.0, min(1.0, float(msg.get("y", 0)) / 1000.0))
         z = max(0.0, min(1.0, float(msg.get("z", 500)) / 1000.0))
         r = max(-1.0, min(1.0, float(msg.get("r", 0)) / 1000.0))
-        moving = (x, y, z, r) != self._sticks
-        self._sticks = (x, y, z, r)
-        self._sticks_us = t
+        moving = (x, y, z, r) != self.commander.sticks
+        self.commander.manual_control(t, (x, y, z, r))
         self.recorder.data(
             topics.ManualControlSetpoint(
                 t, t, True, 2, y, x, r, z * 2.0 - 1.0, 0.0, 0.0, 0.0, moving, int(msg.get("buttons", 0))
@@ -298,7 +276,7 @@ class Vehicle:
     def _on_set_mode(self, msg: Msg) -> list[Msg]:
         if msg.get("target_system", 1) in (0, mav.SYSTEM_ID):
             main, sub = split_custom_mode(int(msg.get("custom_mode", 0)))
-            self.set_mode(nav_state_from_custom_mode(main, sub))
+            self.commander.set_mode(nav_state_from_custom_mode(main, sub))
         return []
 
     def _on_timesync(self, msg: Msg) -> list[Msg]:
@@ -338,211 +316,45 @@ class Vehicle:
         if self._tick % (CONTROL_EVERY * 10) == 0:
             self.world.refresh_near(self.body.x, self.body.y)
         self._estimate()
-        self._commander(t)
+        commander = self.commander
+        commander.update(t)
         goal = self._goal_for(t)
         self.goal = goal
         b, e, st = self.body, self.est, self.st
-        if self.armed and not self.crashed:
+        if commander.armed and not commander.crashed:
             self._cmd = self.ctrl.update(
                 dt, goal, st.x, st.y, st.z, b.vx + e.evx, b.vy + e.evy, b.vz + e.evz, st.yaw
             )
             b.motors = True
         else:
-            self._cmd = _IDLE
+            self._cmd = IDLE
             b.motors = False
             self.ctrl.reset(st.x, st.y, st.z, 0.0, 0.0, 0.0, st.yaw)
         self.drain_nav_events()
+        ready = commander.ready
         for name in self.schedule.due(t):
-            if self.ready or name not in _NEEDS_FIX:
+            if ready or name not in _NEEDS_FIX:
                 self._out.append(STREAMS[name](self, t))
         self._log(t)
-        if self._close_log:
-            self._close_log = False
+        if commander.close_log:
+            commander.close_log = False
             self.recorder.stop()
 
     def _goal_for(self, t: int) -> Goal:
         """The flight task's goal: idle, the manual task of a stick mode, or the navigator's."""
-        if not self.armed or self.crashed:
+        c = self.commander
+        if not c.armed or c.crashed:
             return Goal(GoalKind.IDLE)
         landed = self.land.landed
-        if t - self.armed_at_us < self.params["COM_SPOOLUP_TIME"] * 1e6 and landed:
+        if t - c.armed_at_us < self.params["COM_SPOOLUP_TIME"] * 1e6 and landed:
             return Goal(GoalKind.IDLE)
-        ns = self.nav_state
+        ns = c.nav_state
         if ns in MANUAL_NAV_STATES:
             kind = _MANUAL_GOAL.get(ns, GoalKind.ATTITUDE)
-            if (
-                landed
-                and self._sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2
-                and kind != GoalKind.ATTITUDE
-            ):
+            if landed and c.sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2 and kind != GoalKind.ATTITUDE:
                 return Goal(GoalKind.IDLE)
-            return Goal(kind, sticks=self._sticks)
+            return Goal(kind, sticks=c.sticks)
         return self.nav.update(self.st, t / 1e6)
-
-    # ------------------------------------------------------------------ commander
-
-    def _commander(self, t: int) -> None:
-        if not self.ready and t >= READY_US:
-            self.ready = True
-            self._set_home(t)
-            self.text(MavSeverity.INFO, "Ready for takeoff!")
-        land = self.land
-        transition = land.update(t, self.armed, self.body, self.goal.kind)
-        if transition is not None:
-            self._status_dirty = True
-            if transition is Transition.TAKEOFF:
-                self.text(MavSeverity.INFO, "Takeoff detected")
-            elif transition is Transition.LANDED:
-                self.text(MavSeverity.INFO, "Landing detected")
-        if self.st.landed != land.landed:  # tell clients at once, not at the next 2 Hz slot
-            self.st.landed = land.landed
-            self._out.append(STREAMS["EXTENDED_SYS_STATE"](self, t))
-        if not self.armed:
-            return
-        if self.crashed:
-            if self.body.on_ground:
-                self.disarm(t, Reason.FAILURE_DETECTOR, "Disarmed after crash")
-            return
-        if land.landed:
-            self._auto_disarm(t)
-            return
-        self._check_failsafes(t)
-
-    def _auto_disarm(self, t: int) -> None:
-        """Landed and armed: disarm after a flight (at once in auto modes), or unused (preflight)."""
-        p = self.params
-        land = self.land
-        if land.takeoff_us > self.armed_at_us:
-            if self.nav_state in AUTO_NAV_STATES:
-                self.nav.update(self.st, t / 1e6)  # the navigator sees the landing first (finished)
-                self.drain_nav_events()
-                if self.nav_state == NavState.AUTO_MISSION and self.nav.finished:
-                    self.text(MavSeverity.INFO, "Mission finished, landed")
-                self.disarm(t, Reason.AUTO_DISARM_LAND, "Disarmed by landing")
-            elif p["COM_DISARM_LAND"] > 0 and t - land.landed_at_us >= p["COM_DISARM_LAND"] * 1e6:
-                self.disarm(t, Reason.AUTO_DISARM_LAND, "Disarmed by landing")
-        elif p["COM_DISARM_PRFLT"] > 0 and t - self.armed_at_us >= p["COM_DISARM_PRFLT"] * 1e6:
-            self.disarm(t, Reason.AUTO_DISARM_PREFLIGHT, "Disarmed by auto preflight disarming")
-
-    def _check_failsafes(self, t: int) -> None:
-        """Failsafes in the air: data link lost, manual control lost."""
-        p = self.params
-        if (
-            int(p[DATA_LINK_LOST.action_param]) > 0
-            and self._last_gcs_us is not None
-            and not self.gcs_lost
-            and t - self._last_gcs_us > p["COM_DL_LOSS_T"] * 1e6
-        ):
-            self.gcs_lost = True
-            self._failsafe(DATA_LINK_LOST, t)
-        if (
-            self.nav_state in MANUAL_NAV_STATES
-            and self._sticks_us is not None
-            and t - self._sticks_us > max(p["COM_RC_LOSS_T"], 0.1) * 1e6
-            and int(p[MANUAL_CONTROL_LOST.action_param]) > 0
-        ):
-            self._sticks_us = None
-            self._failsafe(MANUAL_CONTROL_LOST, t)
-
-    def _failsafe(self, condition: Condition, t: int) -> None:
-        """Report the condition, then take the action its parameter chooses (``ACTION_NAV_STATE``)."""
-        self.text(MavSeverity.CRITICAL, condition.text)
-        action = int(self.params[condition.action_param])
-        self.failsafe = True
-        if action == NavAction.TERMINATE:
-            self.text(MavSeverity.CRITICAL, "Failsafe: flight termination")
-            self.body.motors = False
-            self.crashed = True
-            return
-        target = ACTION_NAV_STATE.get(action)
-        if target is not None:
-            self.text(MavSeverity.WARNING, f"Failsafe activated: {target.name.lower().replace('auto_', '')}")
-            self.switch(target, t)
-
-    def _set_home(self, t: int) -> None:
-        st = self.st
-        lat, lon = self.proj.reproject(st.x, st.y)
-        self.home = (st.x, st.y, st.z, lat, lon, self.home_alt - st.z, st.yaw)
-        self.nav.home = (st.x, st.y, st.z)
-        self.home_set = True
-        self._home_count += 1
-        self.recorder.data(
-            topics.HomePosition(
-                t, lat, lon, self.home_alt - st.z, st.x, st.y, st.z, st.yaw, True, True, True, False,
-                self._home_count,
-            )
-        )  # fmt: skip
-        self._out.append(home_position(self, t))
-
-    def arm(self, t: int, reason: int) -> MavResult:
-        if self.armed:
-            return MavResult.ACCEPTED
-        denied = arming_denied(self)
-        if denied is not None:
-            if denied.text is not None:
-                self.text(MavSeverity.CRITICAL, denied.text)
-            return denied.result
-        if not self.recorder.active:
-            self.recorder.start(t, self.params)
-        self.armed = True
-        self.armed_at_us = t
-        self.arming_reason = reason
-        self.failsafe = False
-        self._set_home(t)
-        if self.nav_state == NavState.AUTO_MISSION and self.nav.finished:
-            self.nav.set_current(0)
-        self.nav.enter(self.nav_state, self.st, t / 1e6)
-        self.ctrl.reset(self.st.x, self.st.y, self.st.z, 0.0, 0.0, 0.0, self.st.yaw)
-        self._status_dirty = True
-        self.text(MavSeverity.INFO, "Armed by external command")
-        return MavResult.ACCEPTED
-
-    def disarm(self, t: int, reason: int, text: str) -> None:
-        self.armed = False
-        self.disarming_reason = reason
-        self.body.motors = False
-        self._status_dirty = True
-        self.text(MavSeverity.INFO, text)
-        self._close_log = True
-
-    def _crash(self, t: int, index: int) -> None:
-        b = self.body
-        self.crashed = True
-        self.crash_obstacle = index
-        self.failsafe = True
-        b.vx = b.vy = 0.0
-        b.ax = b.ay = 0.0
-        b.motors = False
-        self._cmd = _IDLE
-        self._status_dirty = True
-        self.text(MavSeverity.CRITICAL, f"crash: collided with obstacle {index}")
-
-    def set_mode(self, ns: NavState | None) -> MavResult:
-        if ns is None or ns == NavState.OFFBOARD:
-            return MavResult.DENIED
-        if self.crashed:
-            return MavResult.DENIED
-        if ns == NavState.AUTO_MISSION and not self.nav.mission:
-            self.text(MavSeverity.CRITICAL, "Mode not available: no valid mission")
-            return MavResult.TEMPORARILY_REJECTED
-        self.user_nav_state = ns
-        self.failsafe = False
-        self.switch(ns, self.time_us)
-        return MavResult.ACCEPTED
-
-    def switch(
-        self, ns: NavState, t: int, *, target_alt: float | None = None, hold_z: float | None = None
-    ) -> None:
-        if ns == self.nav_state and target_alt is None:
-            return
-        if ns == NavState.AUTO_MISSION and self.land.landed and self.nav.finished:
-            self.nav.set_current(0)
-        self.nav_state = ns
-        self.nav_state_us = t
-        self.nav.enter(ns, self.st, t / 1e6, target_alt=target_alt, hold_z=hold_z)
-        b, e, st = self.body, self.est, self.st
-        self.ctrl.reset(st.x, st.y, st.z, b.vx + e.evx, b.vy + e.evy, b.vz + e.evz, st.yaw)
-        self._status_dirty = True
 
     def _params_changed(self) -> None:
         for name in self.param_proto.changed:
@@ -572,9 +384,9 @@ class Vehicle:
             elif ev.kind is EventKind.TEXT:
                 severity, text = ev.value  # type: ignore[misc]
                 self.text(severity, text)
-            elif ev.kind is EventKind.HOLD and self.nav_state == NavState.AUTO_TAKEOFF:
-                self.user_nav_state = NavState.AUTO_LOITER
-                self.switch(NavState.AUTO_LOITER, t, hold_z=float(ev.value))  # type: ignore[arg-type]
+            elif ev.kind is EventKind.HOLD and self.commander.nav_state == NavState.AUTO_TAKEOFF:
+                self.commander.user_nav_state = NavState.AUTO_LOITER
+                self.commander.switch(NavState.AUTO_LOITER, t, hold_z=float(ev.value))  # type: ignore[arg-type]
         if changed:
             self._log_mission_result()
 
@@ -583,7 +395,7 @@ class Vehicle:
         total = len(nav.mission)
         self.recorder.data(
             topics.MissionResult(
-                self.time_us, 0, 0, self._home_count, nav.reached, min(nav.current, 65535), total,
+                self.time_us, 0, 0, self.commander.home_count, nav.reached, min(nav.current, 65535), total,
                 total > 0, False, nav.finished, False, 0, 0, 0, 0,
             )
         )  # fmt: skip
@@ -639,40 +451,20 @@ class Vehicle:
                 )
             )
             self._log_setpoint(t, self.goal)
-        if self._status_dirty or tick % (CONTROL_EVERY * 50) == 0:  # on change, else 1 Hz
-            self._status_dirty = False
+        commander = self.commander
+        if commander.status_dirty or tick % (CONTROL_EVERY * 50) == 0:  # on change, else 1 Hz
+            commander.status_dirty = False
             self._log_status(t)
 
     def _log_status(self, t: int) -> None:
-        rec, land = self.recorder, self.land
-        rec.data(
-            topics.VehicleStatus(
-                t,
-                self.armed_at_us if self.armed else 0,
-                land.takeoff_us if not land.landed else 0,
-                self.nav_state_us,
-                ARMING_STATE_ARMED if self.armed else ARMING_STATE_DISARMED,
-                self.arming_reason,
-                self.disarming_reason,
-                int(self.user_nav_state),
-                int(self.nav_state),
-                4 if self.crashed else 0,
-                0,
-                1,
-                self.failsafe,
-                self.gcs_lost,
-                mav.MAV_TYPE_QUADROTOR,
-                mav.SYSTEM_ID,
-                mav.COMPONENT_ID,
-                self.ready,
-            )
-        )
-        rec.data(land.topic(t, self.body, self.crashed, self.goal.kind))
-        rec.data(topics.ActuatorArmed(t, self.armed, False, self.ready, False, False, False))
+        c, rec = self.commander, self.recorder
+        rec.data(c.status(t))
+        rec.data(self.land.topic(t, self.body, c.crashed, self.goal.kind))
+        rec.data(topics.ActuatorArmed(t, c.armed, False, c.ready, False, False, False))
 
     def _log_setpoint(self, t: int, g: Goal) -> None:
         kind = _SETPOINT_TYPE.get(g.kind)
-        if kind is None or not self.armed:
+        if kind is None or not self.commander.armed:
             return
         lat, lon = self.proj.reproject(g.x, g.y)
         speed = g.speed if g.speed == g.speed else self.limits.cruise

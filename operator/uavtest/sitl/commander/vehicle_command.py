@@ -33,12 +33,12 @@ _HOME_POSITION = 242
 
 
 def _arm_disarm(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
-    t = v.time_us
+    t, cmdr = v.time_us, v.commander
     if c.param1 >= 0.5:
-        return v.arm(t, Reason.EXTERNAL)
-    if v.landed or round(c.param2) == mav.FORCE_DISARM_MAGIC or not v.armed:
-        if v.armed:
-            v.disarm(t, Reason.EXTERNAL, "Disarmed by external command")
+        return cmdr.arm(t, Reason.EXTERNAL)
+    if v.land.landed or round(c.param2) == mav.FORCE_DISARM_MAGIC or not cmdr.armed:
+        if cmdr.armed:
+            cmdr.disarm(t, Reason.EXTERNAL, "Disarmed by external command")
         return MavResult.ACCEPTED
     v.text(MavSeverity.CRITICAL, "Disarming denied: not landed")
     return MavResult.DENIED
@@ -46,26 +46,27 @@ def _arm_disarm(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
 
 def _set_mode(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
     if int(c.param1) & 1:
-        return v.set_mode(nav_state_from_custom_mode(int(c.param2), int(c.param3)))
+        return v.commander.set_mode(nav_state_from_custom_mode(int(c.param2), int(c.param3)))
     return MavResult.DENIED
 
 
 def _takeoff(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
-    if v.crashed:
+    cmdr = v.commander
+    if cmdr.crashed:
         return MavResult.DENIED
     p7 = c.param7
-    alt = p7 - v.home[5] + v.home[2] if math.isfinite(p7) else None
-    v.user_nav_state = NavState.AUTO_TAKEOFF
-    v.switch(NavState.AUTO_TAKEOFF, v.time_us, target_alt=alt)
+    alt = p7 - cmdr.home[5] + cmdr.home[2] if math.isfinite(p7) else None
+    cmdr.user_nav_state = NavState.AUTO_TAKEOFF
+    cmdr.switch(NavState.AUTO_TAKEOFF, v.time_us, target_alt=alt)
     return MavResult.ACCEPTED
 
 
 def _land(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
-    return v.set_mode(NavState.AUTO_LAND)
+    return v.commander.set_mode(NavState.AUTO_LAND)
 
 
 def _return(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
-    return v.set_mode(NavState.AUTO_RTL)
+    return v.commander.set_mode(NavState.AUTO_RTL)
 
 
 def _mission_start(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
@@ -74,11 +75,12 @@ def _mission_start(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult
     first = int(c.param1)
     if 0 < first < len(v.nav.mission):
         v.nav.set_current(first)
+    cmdr = v.commander
     result = MavResult.ACCEPTED
-    if not v.armed:
-        result = v.arm(v.time_us, Reason.MISSION_START)
+    if not cmdr.armed:
+        result = cmdr.arm(v.time_us, Reason.MISSION_START)
     if result == MavResult.ACCEPTED:
-        result = v.set_mode(NavState.AUTO_MISSION)
+        result = cmdr.set_mode(NavState.AUTO_MISSION)
     return result
 
 
