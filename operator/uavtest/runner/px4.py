@@ -11,6 +11,7 @@ from enum import IntEnum
 from uavtest.mavlink_numbers import LandedState, MissionResult, ParamType
 from uavtest.mavlink_numbers import MavCmd as Cmd
 from uavtest.mavlink_numbers import MavResult as AckResult
+from uavtest.px4.modes import AutoSubMode, MainMode, encode_custom_mode, split_custom_mode
 from uavtest.spec.models import FlightMode
 
 __all__ = [
@@ -53,18 +54,17 @@ def result_name(enum: type[IntEnum], value: int) -> str:
         return str(value)
 
 
-# PX4 main modes: MANUAL 1, ALTCTL 2, POSCTL 3, AUTO 4, ACRO 5, OFFBOARD 6, STABILIZED 7
-# AUTO sub modes: READY 1, TAKEOFF 2, LOITER 3, MISSION 4, RTL 5, LAND 6
+#: a test's flight modes as PX4 main/sub modes (numbers in ``uavtest.px4.modes``)
 PX4_MODES: dict[FlightMode, tuple[int, int]] = {
-    FlightMode.MANUAL: (1, 0),
-    FlightMode.ALTITUDE: (2, 0),
-    FlightMode.POSITION: (3, 0),
-    FlightMode.MISSION: (4, 4),
-    FlightMode.HOLD: (4, 3),
-    FlightMode.RETURN: (4, 5),
-    FlightMode.LAND: (4, 6),
-    FlightMode.TAKEOFF: (4, 2),
-    FlightMode.OFFBOARD: (6, 0),
+    FlightMode.MANUAL: (MainMode.MANUAL, 0),
+    FlightMode.ALTITUDE: (MainMode.ALTCTL, 0),
+    FlightMode.POSITION: (MainMode.POSCTL, 0),
+    FlightMode.MISSION: (MainMode.AUTO, AutoSubMode.MISSION),
+    FlightMode.HOLD: (MainMode.AUTO, AutoSubMode.LOITER),
+    FlightMode.RETURN: (MainMode.AUTO, AutoSubMode.RTL),
+    FlightMode.LAND: (MainMode.AUTO, AutoSubMode.LAND),
+    FlightMode.TAKEOFF: (MainMode.AUTO, AutoSubMode.TAKEOFF),
+    FlightMode.OFFBOARD: (MainMode.OFFBOARD, 0),
 }
 
 #: modes in which the vehicle flies by itself: sticks stop when one of these is selected
@@ -75,14 +75,13 @@ AUTO_MODES = frozenset(
 
 def custom_mode(mode: FlightMode) -> int:
     """HEARTBEAT.custom_mode of a PX4 flight mode."""
-    main, sub = PX4_MODES[mode]
-    return (main << 16) | (sub << 24)
+    return encode_custom_mode(*PX4_MODES[mode])
 
 
 def mode_name(custom: int) -> str:
     """The FlightMode name of a PX4 custom_mode, or ``main/sub`` numbers when it is another mode."""
-    main, sub = (custom >> 16) & 0xFF, (custom >> 24) & 0xFF
+    main, sub = split_custom_mode(custom)
     for mode, (m, s) in PX4_MODES.items():
-        if (m, s) == (main, sub) or (m != 4 and m == main):
+        if (m, s) == (main, sub) or (m != MainMode.AUTO and m == main):
             return mode.value
     return f"{main}/{sub}"

@@ -9,9 +9,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from uavtest.px4.modes import AutoSubMode, MainMode
 from uavtest.sitl.mav import MavCmd, Msg
 from uavtest.sitl.mission import NavItem
-from uavtest.sitl.modes import AutoSubMode, MainMode
 from uavtest.sitl.recorder import LogSink
 from uavtest.sitl.vehicle import SimConfig, Vehicle
 

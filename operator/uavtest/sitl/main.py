@@ -36,6 +36,7 @@ import select
 import signal
 import socket
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import FrameType
@@ -196,6 +197,124 @@ class _Watch:
         return None
 
 
+class _Edge:
+    """The simulator's I/O around the vehicle: links, the log server, the lockstep announce."""
+
+    def __init__(self, vehicle: Vehicle, links: list[Link], log_server: LogServer, lockstep: bool) -> None:
+        self.vehicle = vehicle
+        self.links = links
+        self.by_fd = {link.sock.fileno(): link for link in links}
+        self.log_server = log_server
+        self.log_link: Link | None = None  # the link a log download was asked on
+        self.lockstep = lockstep
+
+    def broadcast(self, msgs: list[Msg]) -> None:
+        for msg in msgs:
+            for link in self.links:
+                link.queue(msg)
+
+    def flush(self) -> None:
+        for link in self.links:
+            link.flush()
+
+    def announce(self, *, everywhere: bool) -> None:
+        """The lockstep announce, last in the step's datagram; links nobody spoke on get it only
+        on the wall-clock re-announce (a client that binds their port later still finds it)."""
+        t_ms = self.vehicle.time_us // 1000
+        msg = Msg("NAMED_VALUE_INT", {"time_boot_ms": t_ms, "name": LOCKSTEP_NAME, "value": t_ms})
+        for link in self.links:
+            if everywhere or link.peer_seen or link.always_stream:
+                link.queue(msg)
+
+    def handle(self, link: Link, data: bytes, addr: tuple[str, int]) -> bool:
+        """Handle one datagram; True when it held a lockstep grant that advanced the clock."""
+        vehicle = self.vehicle
+        link.dest = addr
+        link.peer_seen = True
+        granted = False
+        for msg in link.codec.decode(data):
+            if msg.name == "NAMED_VALUE_INT" and str(msg.get("name", "")).rstrip("\x00") == LOCKSTEP_NAME:
+                until_us = int(msg.get("value", 0)) * 1000
+                if self.lockstep and until_us > vehicle.time_us:
+                    self.broadcast(vehicle.advance(until_us))
+                    granted = True
+                continue
+            replies = self.log_server.handle(msg)
+            if replies is not None:
+                self.log_link = link
+            else:
+                replies = vehicle.receive(msg)
+            for reply in replies:
+                link.queue(reply)
+            self.broadcast(vehicle.drain())
+        return granted
+
+    def receive(self, link: Link, watch: _Watch | None) -> bool:
+        """Read every datagram waiting on a link; True when one held a lockstep grant."""
+        granted = False
+        while True:
+            try:
+                data, addr = link.sock.recvfrom(65535)
+            except (BlockingIOError, InterruptedError):
+                break
+            except OSError:  # ICMP port unreachable from an earlier send
+                continue
+            if watch is not None:
+                watch.heard(time.monotonic())
+            granted |= self.handle(link, data, addr)
+        return granted
+
+    def stream_log(self) -> None:
+        if self.log_server.streaming and self.log_link is not None:
+            for msg in self.log_server.next_batch():
+                self.log_link.queue(msg)
+
+    def close(self) -> None:
+        self.vehicle.recorder.stop()
+        self.log_server.close()
+        for link in self.links:
+            link.sock.close()
+
+
+@contextlib.contextmanager
+def _signals() -> Iterator[tuple[_Stop, _WakeupPipe]]:
+    """SIGTERM/SIGINT set ``stop.requested`` and wake the ``select``; handlers restored after."""
+    stop = _Stop()
+    previous = {s: signal.signal(s, stop) for s in (signal.SIGTERM, signal.SIGINT)}
+    wakeup = _WakeupPipe()
+    try:
+        yield stop, wakeup
+    finally:
+        wakeup.close()
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+@dataclass
+class _Clock:
+    """Free-running: the vehicle clock follows the wall clock times the speed factor."""
+
+    speed_factor: float
+    wall0: float
+    sim0: int
+
+    def catch_up(self, edge: _Edge, now: float) -> float:
+        """Advance the vehicle to the wall clock's time; returns the select timeout."""
+        vehicle = edge.vehicle
+        target = self.sim0 + int((now - self.wall0) * self.speed_factor * 1e6)
+        if target >= vehicle.time_us + STEP_US:
+            edge.broadcast(vehicle.advance(target))
+            edge.flush()
+        return max(0.0005, STEP_US * 5 / 1e6 / self.speed_factor)
+
+
+def _check_args(speed_factor: float, idle_exit_s: float | None) -> None:
+    if speed_factor <= 0:
+        raise BadInput("the speed factor must be > 0", field="--speed-factor", value=speed_factor)
+    if idle_exit_s is not None and idle_exit_s < 0:
+        raise BadInput("the idle exit time must be >= 0 s", field="--idle-exit", value=idle_exit_s)
+
+
 def run_sitl(
     test: Path | None,
     *,
@@ -217,149 +336,98 @@ def run_sitl(
     anything for ``idle_exit_s`` wall seconds after one was heard (None or 0: never), and
     when its parent process dies (the engine that started it is gone).
     """
-    if speed_factor <= 0:
-        raise BadInput("the speed factor must be > 0", field="--speed-factor", value=speed_factor)
-    if idle_exit_s is not None and idle_exit_s < 0:
-        raise BadInput("the idle exit time must be >= 0 s", field="--idle-exit", value=idle_exit_s)
-    config = load_config(test, seed)
-    sink = FileLogSink(log_dir, seed)
-    vehicle = Vehicle(config, sink)
-    log_server = LogServer(lambda: sink.closed)
-    log_link: Link | None = None  # the link a log download was asked on
-    local_api = api_port + 40 if api_local_port is None else api_local_port
-    links = [
-        Link("api", _bind(host, local_api), (host, api_port)),
-        Link("gcs", _bind(host, gcs_local_port), (host, gcs_port), always_stream=False),
-    ]
-    by_fd = {link.sock.fileno(): link for link in links}
-    stop = _Stop()
-    previous = {s: signal.signal(s, stop) for s in (signal.SIGTERM, signal.SIGINT)}
-    wakeup = _WakeupPipe()
-    watch = _Watch(idle_exit_s or None) if lockstep else None
-    log.info(
-        "uavtest sitl: pid %d seed %d, API %s:%d -> %s:%d, GCS %d -> %d, %s",
-        os.getpid(),
-        seed,
-        host,
-        local_api,
-        host,
-        api_port,
-        gcs_local_port,
-        gcs_port,
-        "lockstep" if lockstep else f"speed factor {speed_factor:g}",
-    )
-
-    def broadcast(msgs: list[Msg]) -> None:
-        for msg in msgs:
-            for link in links:
-                link.queue(msg)
-
-    def flush() -> None:
-        for link in links:
-            link.flush()
-
-    def announce(*, everywhere: bool) -> None:
-        """The lockstep announce, last in the step's datagram; links nobody spoke on get it only
-        on the wall-clock re-announce (a client that binds their port later still finds it)."""
-        t_ms = vehicle.time_us // 1000
-        msg = Msg("NAMED_VALUE_INT", {"time_boot_ms": t_ms, "name": LOCKSTEP_NAME, "value": t_ms})
-        for link in links:
-            if everywhere or link.peer_seen or link.always_stream:
-                link.queue(msg)
-
-    def handle(link: Link, data: bytes, addr: tuple[str, int]) -> bool:
-        """Handle one datagram; True when it held a lockstep grant that advanced the clock."""
-        nonlocal log_link
-        link.dest = addr
-        link.peer_seen = True
-        granted = False
-        for msg in link.codec.decode(data):
-            if msg.name == "NAMED_VALUE_INT" and str(msg.get("name", "")).rstrip("\x00") == LOCKSTEP_NAME:
-                until_us = int(msg.get("value", 0)) * 1000
-                if lockstep and until_us > vehicle.time_us:
-                    broadcast(vehicle.advance(until_us))
-                    granted = True
-                continue
-            replies = log_server.handle(msg)
-            if replies is not None:
-                log_link = link
-            else:
-                replies = vehicle.receive(msg)
-            for reply in replies:
-                link.queue(reply)
-            broadcast(vehicle.drain())
-        return granted
-
-    wall0 = time.monotonic()
-    sim0 = vehicle.time_us
-    broadcast(vehicle.drain())
-    if lockstep:
-        announce(everywhere=True)
-    flush()
-    last_announce = time.monotonic()
-    fds = [wakeup.rfd, *by_fd]
-    ended = ""
-    try:
-        while not stop.requested:
-            now = time.monotonic()
-            if max_wall_s is not None and now - wall0 > max_wall_s:
-                break
-            heard = watch is not None and watch.last_traffic is not None
-            period = REANNOUNCE_S if heard else SEARCH_REANNOUNCE_S
-            if lockstep:
-                timeout = max(0.0, period - (now - last_announce))
-            else:
-                target = sim0 + int((now - wall0) * speed_factor * 1e6)
-                if target >= vehicle.time_us + STEP_US:
-                    broadcast(vehicle.advance(target))
-                    flush()
-                timeout = max(0.0005, STEP_US * 5 / 1e6 / speed_factor)
-            if log_server.streaming:
-                timeout = min(timeout, LOG_PACE_S)
-            ready, _, _ = select.select(fds, [], [], timeout)
-            granted = False
-            for fd in ready:
-                if fd == wakeup.rfd:
-                    wakeup.drain()
-                    continue
-                link = by_fd[fd]
-                while True:
-                    try:
-                        data, addr = link.sock.recvfrom(65535)
-                    except (BlockingIOError, InterruptedError):
-                        break
-                    except OSError:  # ICMP port unreachable from an earlier send
-                        continue
-                    if watch is not None:
-                        watch.heard(time.monotonic())
-                    granted |= handle(link, data, addr)
-            if stop.requested:
-                break
-            if log_server.streaming and log_link is not None:
-                for msg in log_server.next_batch():
-                    log_link.queue(msg)
-            if lockstep:
-                now = time.monotonic()
-                if granted:
-                    announce(everywhere=False)
-                elif now - last_announce >= period:
-                    assert watch is not None
-                    ended = watch.reason(now) or ""
-                    if ended:
-                        break
-                    broadcast([vehicle.heartbeat()])
-                    announce(everywhere=True)
-                if granted or now - last_announce >= period:
-                    last_announce = now
-            flush()
-    finally:
-        if ended:
-            log.warning("uavtest sitl: %s; closing the log and exiting", ended)
-        vehicle.recorder.stop()
-        log_server.close()
-        for link in links:
-            link.sock.close()
-        wakeup.close()
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+    _check_args(speed_factor, idle_exit_s)
+    with _signals() as (stop, wakeup):  # before the log file appears: a SIGTERM from then on closes it
+        config = load_config(test, seed)
+        sink = FileLogSink(log_dir, seed)
+        vehicle = Vehicle(config, sink)
+        local_api = api_port + 40 if api_local_port is None else api_local_port
+        links = [
+            Link("api", _bind(host, local_api), (host, api_port)),
+            Link("gcs", _bind(host, gcs_local_port), (host, gcs_port), always_stream=False),
+        ]
+        edge = _Edge(vehicle, links, LogServer(lambda: sink.closed), lockstep)
+        log.info(
+            "uavtest sitl: pid %d seed %d, API %s:%d -> %s:%d, GCS %d -> %d, %s",
+            os.getpid(),
+            seed,
+            host,
+            local_api,
+            host,
+            api_port,
+            gcs_local_port,
+            gcs_port,
+            "lockstep" if lockstep else f"speed factor {speed_factor:g}",
+        )
+        watch = _Watch(idle_exit_s or None) if lockstep else None
+        ended = ""
+        try:
+            ended = _loop(edge, stop, wakeup, watch, speed_factor, max_wall_s)
+        finally:
+            if ended:
+                log.warning("uavtest sitl: %s; closing the log and exiting", ended)
+            edge.close()
     return 0
+
+
+def _lockstep_step(edge: _Edge, watch: _Watch, *, granted: bool, due: bool, now: float) -> str:
+    """After a lockstep wait: announce a granted step, or (when due) check the watch and
+    re-announce with a heartbeat; returns why the simulator should end (or "")."""
+    if granted:
+        edge.announce(everywhere=False)
+    elif due:
+        ended = watch.reason(now) or ""
+        if ended:
+            return ended
+        edge.broadcast([edge.vehicle.heartbeat()])
+        edge.announce(everywhere=True)
+    return ""
+
+
+def _loop(
+    edge: _Edge,
+    stop: _Stop,
+    wakeup: _WakeupPipe,
+    watch: _Watch | None,
+    speed_factor: float,
+    max_wall_s: float | None,
+) -> str:
+    """The select loop until stopped; returns why a lockstep simulator ended by itself (or "")."""
+    vehicle, lockstep, log_server = edge.vehicle, edge.lockstep, edge.log_server
+    wall0 = time.monotonic()
+    clock = _Clock(speed_factor, wall0, vehicle.time_us)
+    edge.broadcast(vehicle.drain())
+    if lockstep:
+        edge.announce(everywhere=True)
+    edge.flush()
+    last_announce = time.monotonic()
+    fds = [wakeup.rfd, *edge.by_fd]
+    while not stop.requested:
+        now = time.monotonic()
+        if max_wall_s is not None and now - wall0 > max_wall_s:
+            break
+        heard = watch is not None and watch.last_traffic is not None
+        period = REANNOUNCE_S if heard else SEARCH_REANNOUNCE_S
+        timeout = max(0.0, period - (now - last_announce)) if lockstep else clock.catch_up(edge, now)
+        if log_server.streaming:
+            timeout = min(timeout, LOG_PACE_S)
+        ready, _, _ = select.select(fds, [], [], timeout)
+        granted = False
+        for fd in ready:
+            if fd == wakeup.rfd:
+                wakeup.drain()
+                continue
+            granted |= edge.receive(edge.by_fd[fd], watch)
+        if stop.requested:
+            break
+        edge.stream_log()
+        if lockstep:
+            now = time.monotonic()
+            assert watch is not None
+            ended = _lockstep_step(edge, watch, granted=granted, due=now - last_announce >= period, now=now)
+            if ended:
+                return ended
+            if granted or now - last_announce >= period:
+                last_announce = now
+        edge.flush()
+    return ""

@@ -1,7 +1,8 @@
 """The flight recorder: PX4 topics encoded as ULog, handed to a sink (file, memory).
 
-The vehicle calls ``start`` / ``data`` / ``text`` / ``param`` / ``stop``; the recorder encodes
-(pure) and passes bytes to a ``LogSink`` — the I/O edge decides where they go.
+PX4's ``logger`` module. The vehicle calls ``start`` / ``data`` (a ``uorb`` topic dataclass, recorded
+as it is) / ``text`` / ``param`` / ``stop``; the recorder encodes (pure) and passes bytes to a
+``LogSink`` — the I/O edge decides where they go.
 """
 
 from __future__ import annotations
@@ -10,8 +11,8 @@ from typing import Protocol
 
 from uavtest.sitl.mav import ParamType
 from uavtest.sitl.params import ParamStore
-from uavtest.sitl.ulog_topics import FORMATS, TOPICS
 from uavtest.sitl.ulog_writer import ULogEncoder
+from uavtest.sitl.uorb import FORMATS, RECORD, TOPICS
 
 __all__ = ["FlightRecorder", "LogSink", "MemorySink"]
 
@@ -60,10 +61,12 @@ class FlightRecorder:
         self.sink.open(self._enc.header(t_us, self.info, plist, TOPICS))
         self.active = True
 
-    def data(self, topic: str, values: tuple[object, ...]) -> None:
+    def data(self, msg: object) -> None:
+        """Record one uORB topic dataclass (``uorb.VehicleStatus(...)``) as it is."""
         if self.active:
             assert self.sink is not None
-            self.sink.write(self._enc.data(topic, values))
+            name, flatten = RECORD[type(msg)]
+            self.sink.write(self._enc.data(name, flatten(msg)))
 
     def text(self, level: int, t_us: int, text: str) -> None:
         if self.active:

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
+from uavtest.px4.modes import NavState
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.mav import MavCmd, Msg
-from uavtest.sitl.modes import NavState
 
 from .conftest import competition
 from .test_vehicle import command, ready_vehicle

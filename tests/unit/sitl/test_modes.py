@@ -1,7 +1,6 @@
 from pymavlink.dialects.v20 import common as mavlink2
 
-from uavtest.sitl import mav
-from uavtest.sitl.modes import (
+from uavtest.px4.modes import (
     AutoSubMode,
     MainMode,
     NavState,
@@ -10,6 +9,7 @@ from uavtest.sitl.modes import (
     nav_state_from_custom_mode,
     split_custom_mode,
 )
+from uavtest.sitl import mav
 
 
 def test_custom_mode_packs_main_in_bits_16_23_and_sub_in_24_31():
@@ -79,3 +79,13 @@ def test_mavlink_numbers_match_pymavlink():
     assert mavlink2.MAV_AUTOPILOT_PX4 == mav.MAV_AUTOPILOT_PX4
     assert mavlink2.MAV_SYS_STATUS_PREARM_CHECK == mav.SYS_STATUS_PREARM_CHECK
     assert mavlink2.MAV_TYPE_QUADROTOR == mav.MAV_TYPE_QUADROTOR
+
+
+def test_one_home_for_runner_and_simulator():
+    from uavtest.px4.modes import encode_custom_mode, mode_name
+    from uavtest.runner import px4 as runner_px4
+    from uavtest.spec.models import FlightMode
+
+    assert runner_px4.custom_mode(FlightMode.MISSION) == custom_mode(NavState.AUTO_MISSION)
+    assert runner_px4.custom_mode(FlightMode.POSITION) == encode_custom_mode(MainMode.POSCTL)
+    assert mode_name(4, 5) == "AUTO.RTL" and mode_name(3, 0) == "POSCTL" and mode_name(9, 0) == "9/0"

@@ -2,9 +2,9 @@
 
 import math
 
+from uavtest.px4.modes import AutoSubMode, MainMode, NavState
 from uavtest.sitl.mav import LandedState, MavCmd, MavResult, Msg
 from uavtest.sitl.mission import from_spec
-from uavtest.sitl.modes import AutoSubMode, MainMode, NavState
 from uavtest.sitl.vehicle import SimConfig, Vehicle
 from uavtest.spec.models import BoxPosition, BoxSize, Home, MissionItem, MissionItemKind, Obstacle, Wind
 

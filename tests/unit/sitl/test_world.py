@@ -5,7 +5,7 @@ import numpy as np
 
 from uavtest.analysis.geometry import collides
 from uavtest.sitl.geo import Projection
-from uavtest.sitl.physics import Box
+from uavtest.sitl.simulator_sih import Box
 from uavtest.spec.geo import geodetic_to_ned, ned_to_geodetic
 from uavtest.spec.models import BoxPosition, BoxSize, Obstacle
 

@@ -22,11 +22,11 @@ import random
 from dataclasses import dataclass, field
 from enum import Enum
 
-from uavtest.sitl.controller import Goal, GoalKind, wrap_pi
+from uavtest.px4.modes import NavState
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.mav import MavCmd, MavSeverity
+from uavtest.sitl.mc_pos_control import Goal, GoalKind, wrap_pi
 from uavtest.sitl.mission import NavItem, has_position
-from uavtest.sitl.modes import NavState
 from uavtest.sitl.params import ParamStore
 
 __all__ = ["Event", "EventKind", "Navigator", "State"]

@@ -24,9 +24,9 @@ from dataclasses import dataclass
 from enum import Enum
 
 from uavtest.sitl.params import ParamStore
-from uavtest.sitl.physics import GRAVITY
+from uavtest.sitl.simulator_sih import GRAVITY
 
-__all__ = ["Controller", "Goal", "GoalKind", "Limits", "wrap_pi"]
+__all__ = ["IDLE", "Controller", "Goal", "GoalKind", "Limits", "wrap_pi"]
 
 TKO_RAMP_START = 0.7  # m/s (down): PX4's takeoff ramp start
 Z_I_SCALE = 0.1
@@ -339,3 +339,7 @@ class Controller:
         ax, ay = self._xy_loops(dt, x, y, vx, vy)
         ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
         return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), self.yawrate_sp
+
+
+#: the controller's output with the motors off: no tilt, thrust balancing gravity, no yaw rate
+IDLE = (0.0, 0.0, GRAVITY, 0.0)

@@ -1,4 +1,4 @@
-"""PX4 flight modes as data: custom_mode main/sub numbers and vehicle_status nav_state.
+"""PX4 flight modes as data, one home for the runner and the simulator.
 
 Numbers from PX4 ``src/modules/commander/px4_custom_mode.h`` and ``msg/VehicleStatus.msg``
 (v1.15). HEARTBEAT's ``custom_mode`` packs the main mode in bits 16-23 and the sub mode in
@@ -21,6 +21,8 @@ __all__ = [
     "NavState",
     "base_mode_flags",
     "custom_mode",
+    "encode_custom_mode",
+    "mode_name",
     "nav_state_from_custom_mode",
     "split_custom_mode",
 ]
@@ -118,10 +120,15 @@ _MANUAL_INPUT_ENABLED = 64
 _SAFETY_ARMED = 128
 
 
+def encode_custom_mode(main: int, sub: int = 0) -> int:
+    """HEARTBEAT.custom_mode of a main/sub mode pair: main << 16 | sub << 24."""
+    return (int(main) << 16) | (int(sub) << 24)
+
+
 def custom_mode(nav_state: NavState) -> int:
     """HEARTBEAT.custom_mode of a nav_state: main << 16 | sub << 24."""
     main, sub = MODE_OF_NAV_STATE[nav_state]
-    return (int(main) << 16) | (int(sub) << 24)
+    return encode_custom_mode(main, sub)
 
 
 def split_custom_mode(value: int) -> tuple[int, int]:
@@ -153,3 +160,17 @@ def base_mode_flags(nav_state: NavState, armed: bool) -> int:
     else:
         flags |= _AUTO_ENABLED | _STABILIZE_ENABLED | _GUIDED_ENABLED
     return flags
+
+
+def mode_name(main: int, sub: int) -> str:
+    """PX4's name of a main/sub mode (``AUTO.MISSION``, ``POSCTL``), or ``main/sub`` numbers."""
+    try:
+        name = MainMode(main).name
+    except ValueError:
+        return f"{main}/{sub}"
+    if main != MainMode.AUTO:
+        return name
+    try:
+        return f"{name}.{AutoSubMode(sub).name}"
+    except ValueError:
+        return f"{main}/{sub}"

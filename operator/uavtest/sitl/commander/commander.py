@@ -1,0 +1,277 @@
+"""The commander's state machine (PX4 ``Commander``): readiness, arming, nav state, failsafes.
+
+Fed once per 50 Hz tick (``update``) after the land detector; ``arm`` / ``disarm`` /
+``set_mode`` / ``switch`` are what commands and failsafes call. It publishes
+``vehicle_status`` (``status``) and talks to the rest of the vehicle through the vehicle it
+belongs to (clock, outbox of MAVLink messages and status texts, navigator events).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from uavtest.px4.modes import (
+    ARMING_STATE_ARMED,
+    ARMING_STATE_DISARMED,
+    AUTO_NAV_STATES,
+    MANUAL_NAV_STATES,
+    NavState,
+)
+from uavtest.sitl import mav
+from uavtest.sitl.commander.arming import Reason, arming_denied
+from uavtest.sitl.commander.failsafe import (
+    ACTION_NAV_STATE,
+    DATA_LINK_LOST,
+    MANUAL_CONTROL_LOST,
+    Condition,
+    NavAction,
+)
+from uavtest.sitl.land_detector import Transition
+from uavtest.sitl.mav import MavResult, MavSeverity
+from uavtest.sitl.mavlink_streams import STREAMS, home_position
+from uavtest.sitl.mc_pos_control import IDLE
+from uavtest.sitl.uorb import HomePosition, VehicleStatus
+
+if TYPE_CHECKING:
+    from uavtest.sitl.vehicle import Vehicle
+
+__all__ = ["READY_US", "Commander"]
+
+READY_US = 1_500_000  # estimator converged, home set
+
+
+class Commander:
+    def __init__(self, v: Vehicle) -> None:
+        self.v = v
+        self.params = v.params
+        self.nav = v.nav
+        self.ctrl = v.ctrl
+        self.body = v.body
+        self.est = v.est
+        self.st = v.st
+        self.land = v.land
+        self.recorder = v.recorder
+        self.proj = v.proj
+        self.home_alt = v.home_alt
+        home = v.config.home
+        self.armed = False
+        self.armed_at_us = 0
+        self.nav_state = NavState.AUTO_LOITER
+        self.user_nav_state = NavState.AUTO_LOITER
+        self.nav_state_us = 0
+        self.arming_reason = 0
+        self.disarming_reason = 0
+        self.crashed = False
+        self.crash_obstacle: int | None = None
+        self.failsafe = False
+        self.gcs_lost = False
+        self.ready = False
+        self.home_set = False
+        self.home = (0.0, 0.0, 0.0, home.lat, home.lon, home.alt, 0.0)
+        self._home_count = 0
+        self._last_gcs_us: int | None = None
+        self.sticks = (0.0, 0.0, 0.5, 0.0)
+        self._sticks_us: int | None = None
+        self.close_log = False  # the log closes after this tick (disarmed)
+        self.status_dirty = True  # vehicle_status changed: log it now, not at the next 1 Hz slot
+
+    @property
+    def home_count(self) -> int:
+        return self._home_count
+
+    def gcs_heartbeat(self, t: int) -> None:
+        self._last_gcs_us = t
+        if self.gcs_lost:
+            self.gcs_lost = False
+            self.v.text(MavSeverity.INFO, "Data link regained")
+
+    def manual_control(self, t: int, sticks: tuple[float, float, float, float]) -> None:
+        self.sticks = sticks
+        self._sticks_us = t
+
+    def status(self, t: int) -> VehicleStatus:
+        land = self.land
+        return VehicleStatus(
+            t,
+            self.armed_at_us if self.armed else 0,
+            land.takeoff_us if not land.landed else 0,
+            self.nav_state_us,
+            ARMING_STATE_ARMED if self.armed else ARMING_STATE_DISARMED,
+            self.arming_reason,
+            self.disarming_reason,
+            int(self.user_nav_state),
+            int(self.nav_state),
+            4 if self.crashed else 0,
+            0,
+            1,
+            self.failsafe,
+            self.gcs_lost,
+            mav.MAV_TYPE_QUADROTOR,
+            mav.SYSTEM_ID,
+            mav.COMPONENT_ID,
+            self.ready,
+        )
+
+    def update(self, t: int) -> None:
+        if not self.ready and t >= READY_US:
+            self.ready = True
+            self.set_home(t)
+            self.v.text(MavSeverity.INFO, "Ready for takeoff!")
+        land = self.land
+        transition = land.update(t, self.armed, self.body, self.v.goal.kind)
+        if transition is not None:
+            self.status_dirty = True
+            if transition is Transition.TAKEOFF:
+                self.v.text(MavSeverity.INFO, "Takeoff detected")
+            elif transition is Transition.LANDED:
+                self.v.text(MavSeverity.INFO, "Landing detected")
+        if self.st.landed != land.landed:  # tell clients at once, not at the next 2 Hz slot
+            self.st.landed = land.landed
+            self.v._out.append(STREAMS["EXTENDED_SYS_STATE"](self.v, t))
+        if not self.armed:
+            return
+        if self.crashed:
+            if self.body.on_ground:
+                self.disarm(t, Reason.FAILURE_DETECTOR, "Disarmed after crash")
+            return
+        if land.landed:
+            self._auto_disarm(t)
+            return
+        self._check_failsafes(t)
+
+    def _auto_disarm(self, t: int) -> None:
+        """Landed and armed: disarm after a flight (at once in auto modes), or unused (preflight)."""
+        p = self.params
+        land = self.land
+        if land.takeoff_us > self.armed_at_us:
+            if self.nav_state in AUTO_NAV_STATES:
+                self.nav.update(self.st, t / 1e6)  # the navigator sees the landing first (finished)
+                self.v.drain_nav_events()
+                if self.nav_state == NavState.AUTO_MISSION and self.nav.finished:
+                    self.v.text(MavSeverity.INFO, "Mission finished, landed")
+                self.disarm(t, Reason.AUTO_DISARM_LAND, "Disarmed by landing")
+            elif p["COM_DISARM_LAND"] > 0 and t - land.landed_at_us >= p["COM_DISARM_LAND"] * 1e6:
+                self.disarm(t, Reason.AUTO_DISARM_LAND, "Disarmed by landing")
+        elif p["COM_DISARM_PRFLT"] > 0 and t - self.armed_at_us >= p["COM_DISARM_PRFLT"] * 1e6:
+            self.disarm(t, Reason.AUTO_DISARM_PREFLIGHT, "Disarmed by auto preflight disarming")
+
+    def _check_failsafes(self, t: int) -> None:
+        """Failsafes in the air: data link lost, manual control lost."""
+        p = self.params
+        if (
+            int(p[DATA_LINK_LOST.action_param]) > 0
+            and self._last_gcs_us is not None
+            and not self.gcs_lost
+            and t - self._last_gcs_us > p["COM_DL_LOSS_T"] * 1e6
+        ):
+            self.gcs_lost = True
+            self._failsafe(DATA_LINK_LOST, t)
+        if (
+            self.nav_state in MANUAL_NAV_STATES
+            and self._sticks_us is not None
+            and t - self._sticks_us > max(p["COM_RC_LOSS_T"], 0.1) * 1e6
+            and int(p[MANUAL_CONTROL_LOST.action_param]) > 0
+        ):
+            self._sticks_us = None
+            self._failsafe(MANUAL_CONTROL_LOST, t)
+
+    def _failsafe(self, condition: Condition, t: int) -> None:
+        """Report the condition, then take the action its parameter chooses (``ACTION_NAV_STATE``)."""
+        self.v.text(MavSeverity.CRITICAL, condition.text)
+        action = int(self.params[condition.action_param])
+        self.failsafe = True
+        if action == NavAction.TERMINATE:
+            self.v.text(MavSeverity.CRITICAL, "Failsafe: flight termination")
+            self.body.motors = False
+            self.crashed = True
+            return
+        target = ACTION_NAV_STATE.get(action)
+        if target is not None:
+            name = target.name.lower().replace("auto_", "")
+            self.v.text(MavSeverity.WARNING, f"Failsafe activated: {name}")
+            self.switch(target, t)
+
+    def set_home(self, t: int) -> None:
+        st = self.st
+        lat, lon = self.proj.reproject(st.x, st.y)
+        self.home = (st.x, st.y, st.z, lat, lon, self.home_alt - st.z, st.yaw)
+        self.nav.home = (st.x, st.y, st.z)
+        self.home_set = True
+        self._home_count += 1
+        self.recorder.data(
+            HomePosition(
+                t, lat, lon, self.home_alt - st.z, st.x, st.y, st.z, st.yaw, True, True, True, False,
+                self._home_count,
+            )
+        )  # fmt: skip
+        self.v._out.append(home_position(self.v, t))
+
+    def arm(self, t: int, reason: int) -> MavResult:
+        if self.armed:
+            return MavResult.ACCEPTED
+        denied = arming_denied(self.v)
+        if denied is not None:
+            if denied.text is not None:
+                self.v.text(MavSeverity.CRITICAL, denied.text)
+            return denied.result
+        if not self.recorder.active:
+            self.recorder.start(t, self.params)
+        self.armed = True
+        self.armed_at_us = t
+        self.arming_reason = reason
+        self.failsafe = False
+        self.set_home(t)
+        if self.nav_state == NavState.AUTO_MISSION and self.nav.finished:
+            self.nav.set_current(0)
+        self.nav.enter(self.nav_state, self.st, t / 1e6)
+        self.ctrl.reset(self.st.x, self.st.y, self.st.z, 0.0, 0.0, 0.0, self.st.yaw)
+        self.status_dirty = True
+        self.v.text(MavSeverity.INFO, "Armed by external command")
+        return MavResult.ACCEPTED
+
+    def disarm(self, t: int, reason: int, text: str) -> None:
+        self.armed = False
+        self.disarming_reason = reason
+        self.body.motors = False
+        self.status_dirty = True
+        self.v.text(MavSeverity.INFO, text)
+        self.close_log = True
+
+    def crash(self, t: int, index: int) -> None:
+        b = self.body
+        self.crashed = True
+        self.crash_obstacle = index
+        self.failsafe = True
+        b.vx = b.vy = 0.0
+        b.ax = b.ay = 0.0
+        b.motors = False
+        self.v._cmd = IDLE
+        self.status_dirty = True
+        self.v.text(MavSeverity.CRITICAL, f"crash: collided with obstacle {index}")
+
+    def set_mode(self, ns: NavState | None) -> MavResult:
+        if ns is None or ns == NavState.OFFBOARD:
+            return MavResult.DENIED
+        if self.crashed:
+            return MavResult.DENIED
+        if ns == NavState.AUTO_MISSION and not self.nav.mission:
+            self.v.text(MavSeverity.CRITICAL, "Mode not available: no valid mission")
+            return MavResult.TEMPORARILY_REJECTED
+        self.user_nav_state = ns
+        self.failsafe = False
+        self.switch(ns, self.v.time_us)
+        return MavResult.ACCEPTED
+
+    def switch(
+        self, ns: NavState, t: int, *, target_alt: float | None = None, hold_z: float | None = None
+    ) -> None:
+        if ns == self.nav_state and target_alt is None:
+            return
+        if ns == NavState.AUTO_MISSION and self.land.landed and self.nav.finished:
+            self.nav.set_current(0)
+        self.nav_state = ns
+        self.nav_state_us = t
+        self.nav.enter(ns, self.st, t / 1e6, target_alt=target_alt, hold_z=hold_z)
+        b, e, st = self.body, self.est, self.st
+        self.ctrl.reset(st.x, st.y, st.z, b.vx + e.evx, b.vy + e.evy, b.vz + e.evz, st.yaw)
+        self.status_dirty = True

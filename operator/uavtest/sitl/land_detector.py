@@ -1,0 +1,103 @@
+"""PX4's land detector (``src/modules/land_detector``, multicopter): takeoff and landing.
+
+Fed at 50 Hz with the armed state, the body's ground contact and the active goal; keeps
+``landed``, ``ground_contact``, ``maybe_landed`` and the takeoff / landing times, and says
+when the vehicle has just taken off or landed. Under climb-rate control, ground contact needs a
+commanded descent (``descent_commanded``); landed follows ``LNDMC_TRIG_TIME`` later.
+"""
+
+from __future__ import annotations
+
+import math
+from enum import Enum
+
+from uavtest.sitl.mc_pos_control import Controller, GoalKind
+from uavtest.sitl.params import ParamStore
+from uavtest.sitl.simulator_sih import Body
+from uavtest.sitl.uorb import VehicleLandDetected
+
+__all__ = ["TAKEOFF_DETECT_S", "LandDetector", "Transition"]
+
+TAKEOFF_DETECT_S = 0.8  # into the takeoff ramp, PX4's land detector reports the takeoff
+
+
+class Transition(Enum):
+    TAKEOFF = "takeoff"  # armed, left the ground
+    LANDED = "landed"  # armed, landed
+    RESTING = "resting"  # disarmed, fell back on the ground
+
+
+class LandDetector:
+    def __init__(self, params: ParamStore, ctrl: Controller, jitter: float) -> None:
+        self.params = params
+        self.ctrl = ctrl
+        self.jitter = jitter
+        self.landed = True
+        self.ground_contact = True
+        self.maybe_landed = True
+        self.landed_at_us = 0
+        self.takeoff_us = 0
+        self._ground_since: int | None = None
+
+    def update(self, t: int, armed: bool, b: Body, goal: GoalKind) -> Transition | None:
+        if armed:
+            if self.landed:
+                airborne = not b.on_ground and b.z < -0.15
+                ramp_done = goal is GoalKind.TAKEOFF and self.ctrl.ramp >= TAKEOFF_DETECT_S
+                if airborne or ramp_done:
+                    self.landed = self.ground_contact = self.maybe_landed = False
+                    self.takeoff_us = t
+                    self._ground_since = None
+                    return Transition.TAKEOFF
+            elif b.on_ground and self.descent_commanded(goal):
+                if self._ground_since is None:
+                    self._ground_since = t
+                on = (t - self._ground_since) / 1e6
+                self.ground_contact = on >= 0.3
+                self.maybe_landed = on >= 1.0 + self.jitter
+                if on >= 1.0 + self.jitter + self.params["LNDMC_TRIG_TIME"]:
+                    self.landed = True
+                    self.landed_at_us = t
+                    return Transition.LANDED
+            else:
+                self._ground_since = None
+                self.ground_contact = self.maybe_landed = False
+        elif not self.landed and b.on_ground:
+            self.landed = self.ground_contact = self.maybe_landed = True
+            self.landed_at_us = t
+            return Transition.RESTING
+        return None
+
+    def descent_commanded(self, goal: GoalKind) -> bool:
+        """PX4's land detector: under climb-rate control, ground contact needs a commanded descent.
+
+        While the takeoff ramp builds up thrust (or any climb is commanded) a vehicle still
+        resting on the ground is not landing: PX4 requires the velocity setpoint to point down
+        at >= 1.1 LNDMC_Z_VEL_MAX (itself capped at min(MPC_LAND_CRWL, MPC_LAND_SPEED) / 1.2)
+        until it is landed. Without climb-rate control (manual/stabilized) thrust alone decides,
+        and the body only rests on the ground at low thrust.
+        """
+        if goal is GoalKind.TAKEOFF:
+            return False
+        if goal in (GoalKind.ATTITUDE, GoalKind.IDLE):
+            return True
+        p = self.params
+        z_vel_max = min(p["LNDMC_Z_VEL_MAX"], min(p["MPC_LAND_CRWL"], p["MPC_LAND_SPEED"]) / 1.2)
+        return self.ctrl.vz >= 1.1 * z_vel_max
+
+    def topic(self, t: int, b: Body, crashed: bool, goal: GoalKind) -> VehicleLandDetected:
+        landed = self.landed
+        return VehicleLandDetected(
+            t,
+            crashed and not b.on_ground and not landed,
+            self.ground_contact,
+            self.maybe_landed,
+            landed,
+            False,
+            goal is GoalKind.LAND,
+            landed,
+            abs(b.vz) > 0.25,
+            math.hypot(b.vx, b.vy) > 1.5,
+            True,
+            landed,
+        )

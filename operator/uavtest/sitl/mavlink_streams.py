@@ -1,0 +1,257 @@
+"""PX4's MAVLink streams (``src/modules/mavlink/streams``): one builder per message.
+
+``STREAMS`` maps a message name to a function of (vehicle, time) that builds it from the
+vehicle's current state; ``telemetry.Schedule`` says when each is due.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+from uavtest.px4.modes import NavState, base_mode_flags, custom_mode
+from uavtest.sitl import mav
+from uavtest.sitl.mav import MavState, Msg
+
+if TYPE_CHECKING:
+    from uavtest.sitl.vehicle import Vehicle
+
+__all__ = ["STREAMS", "SW_VERSION", "autopilot_version", "home_position"]
+
+SW_VERSION = 0x010F0000  # reported as PX4 v1.15.0 compatible
+
+
+def local_position_ned(v: Vehicle, t: int) -> Msg:
+    b, e, st = v.body, v.est, v.st
+    return Msg(
+        "LOCAL_POSITION_NED",
+        {
+            "time_boot_ms": t // 1000,
+            "x": st.x,
+            "y": st.y,
+            "z": st.z,
+            "vx": b.vx + e.evx,
+            "vy": b.vy + e.evy,
+            "vz": b.vz + e.evz,
+        },
+    )
+
+
+def attitude(v: Vehicle, t: int) -> Msg:
+    b = v.body
+    roll, pitch = b.tilt()
+    return Msg(
+        "ATTITUDE",
+        {
+            "time_boot_ms": t // 1000,
+            "roll": roll,
+            "pitch": pitch,
+            "yaw": v.st.yaw,
+            "rollspeed": 0.0,
+            "pitchspeed": 0.0,
+            "yawspeed": b.yawrate,
+        },
+    )
+
+
+def global_position_int(v: Vehicle, t: int) -> Msg:
+    b, st = v.body, v.st
+    lat, lon = v.proj.reproject(st.x, st.y)
+    hdg = round(math.degrees(st.yaw) * 100) % 36000
+    return Msg(
+        "GLOBAL_POSITION_INT",
+        {
+            "time_boot_ms": t // 1000,
+            "lat": round(lat * 1e7),
+            "lon": round(lon * 1e7),
+            "alt": round((v.home_alt - st.z) * 1000),
+            "relative_alt": round((v.home[2] - st.z) * 1000),
+            "vx": round(b.vx * 100),
+            "vy": round(b.vy * 100),
+            "vz": round(b.vz * 100),
+            "hdg": hdg,
+        },
+    )
+
+
+def heartbeat(v: Vehicle, t: int) -> Msg:
+    if v.crashed:
+        state = MavState.EMERGENCY
+    elif v.failsafe:
+        state = MavState.CRITICAL
+    elif v.armed:
+        state = MavState.ACTIVE
+    else:
+        state = MavState.STANDBY if v.ready else MavState.BOOT
+    return Msg(
+        "HEARTBEAT",
+        {
+            "type": mav.MAV_TYPE_QUADROTOR,
+            "autopilot": mav.MAV_AUTOPILOT_PX4,
+            "base_mode": base_mode_flags(v.nav_state, v.armed),
+            "custom_mode": custom_mode(v.nav_state),
+            "system_status": int(state),
+            "mavlink_version": 3,
+        },
+    )
+
+
+def extended_sys_state(v: Vehicle, t: int) -> Msg:
+    return Msg("EXTENDED_SYS_STATE", {"vtol_state": 0, "landed_state": int(v.landed_state())})
+
+
+def sys_status(v: Vehicle, t: int) -> Msg:
+    health = mav.SYS_STATUS_SENSORS & ~mav.SYS_STATUS_GPS
+    if v.ready:
+        health |= mav.SYS_STATUS_GPS | (0 if v.crashed else mav.SYS_STATUS_PREARM_CHECK)
+    return Msg(
+        "SYS_STATUS",
+        {
+            "onboard_control_sensors_present": mav.SYS_STATUS_SENSORS | mav.SYS_STATUS_PREARM_CHECK,
+            "onboard_control_sensors_enabled": mav.SYS_STATUS_SENSORS | mav.SYS_STATUS_PREARM_CHECK,
+            "onboard_control_sensors_health": health,
+            "load": 100,
+            "voltage_battery": 16200,
+            "current_battery": 1000 if v.armed else 100,
+            "battery_remaining": 100,
+            "drop_rate_comm": 0,
+            "errors_comm": 0,
+            "errors_count1": 0,
+            "errors_count2": 0,
+            "errors_count3": 0,
+            "errors_count4": 0,
+        },
+    )
+
+
+def system_time(v: Vehicle, t: int) -> Msg:
+    return Msg("SYSTEM_TIME", {"time_unix_usec": 0, "time_boot_ms": t // 1000})
+
+
+def home_position(v: Vehicle, t: int) -> Msg:
+    hx, hy, hz, lat, lon, alt, _ = v.home
+    return Msg(
+        "HOME_POSITION",
+        {
+            "latitude": round(lat * 1e7),
+            "longitude": round(lon * 1e7),
+            "altitude": round(alt * 1000),
+            "x": hx,
+            "y": hy,
+            "z": hz,
+            "q": [1.0, 0.0, 0.0, 0.0],
+            "approach_x": 0.0,
+            "approach_y": 0.0,
+            "approach_z": 0.0,
+            "time_usec": t,
+        },
+    )
+
+
+def mission_current(v: Vehicle, t: int) -> Msg:
+    nav = v.nav
+    total = len(nav.mission)
+    in_mission = v.nav_state == NavState.AUTO_MISSION
+    state = 1 if total == 0 else 5 if nav.finished else 3 if in_mission else 2
+    return Msg(
+        "MISSION_CURRENT",
+        {
+            "seq": min(nav.current, 65535),
+            "total": total,
+            "mission_state": state,
+            "mission_mode": int(in_mission),
+        },
+    )
+
+
+def vfr_hud(v: Vehicle, t: int) -> Msg:
+    b, st = v.body, v.st
+    return Msg(
+        "VFR_HUD",
+        {
+            "airspeed": math.hypot(b.vx - v.wind.n, b.vy - v.wind.e),
+            "groundspeed": math.hypot(b.vx, b.vy),
+            "heading": round(math.degrees(st.yaw)) % 360,
+            "throttle": 50 if b.motors else 0,
+            "alt": v.home_alt - st.z,
+            "climb": -b.vz,
+        },
+    )
+
+
+def battery_status(v: Vehicle, t: int) -> Msg:
+    return Msg(
+        "BATTERY_STATUS",
+        {
+            "id": 0,
+            "battery_function": 1,
+            "type": 1,
+            "temperature": 32767,
+            "voltages": [16200] + [65535] * 9,
+            "current_battery": 1000 if v.armed else 100,
+            "current_consumed": -1,
+            "energy_consumed": -1,
+            "battery_remaining": 100,
+        },
+    )
+
+
+def gps_raw_int(v: Vehicle, t: int) -> Msg:
+    b = v.body
+    lat, lon = v.proj.reproject(b.x, b.y)
+    return Msg(
+        "GPS_RAW_INT",
+        {
+            "time_usec": t,
+            "fix_type": 3 if v.ready else 0,
+            "lat": round(lat * 1e7),
+            "lon": round(lon * 1e7),
+            "alt": round((v.home_alt - b.z) * 1000),
+            "eph": 70,
+            "epv": 100,
+            "vel": round(math.hypot(b.vx, b.vy) * 100),
+            "cog": 0,
+            "satellites_visible": 12,
+        },
+    )
+
+
+def autopilot_version(v: Vehicle) -> Msg:
+    # MAV_PROTOCOL_CAPABILITY: MISSION_FLOAT|PARAM_FLOAT|MISSION_INT|COMMAND_INT|PARAM_ENCODE_BYTEWISE|
+    # SET_POSITION_TARGET_LOCAL_NED|SET_POSITION_TARGET_GLOBAL_INT|MAVLINK2|MISSION_FENCE|MISSION_RALLY
+    caps = 1 | 2 | 4 | 8 | 16 | 128 | 256 | 8192 | 16384 | 32768
+    return Msg(
+        "AUTOPILOT_VERSION",
+        {
+            "capabilities": caps,
+            "flight_sw_version": SW_VERSION,
+            "middleware_sw_version": SW_VERSION,
+            "os_sw_version": 0,
+            "board_version": 0,
+            "flight_custom_version": [0] * 8,
+            "middleware_custom_version": [0] * 8,
+            "os_custom_version": [0] * 8,
+            "vendor_id": 0,
+            "product_id": 0,
+            "uid": 1 + v.config.seed,
+            "uid2": [0] * 18,
+        },
+    )
+
+
+#: message name → builder
+STREAMS: dict[str, Callable[[Vehicle, int], Msg]] = {
+    "LOCAL_POSITION_NED": local_position_ned,
+    "ATTITUDE": attitude,
+    "GLOBAL_POSITION_INT": global_position_int,
+    "HEARTBEAT": heartbeat,
+    "EXTENDED_SYS_STATE": extended_sys_state,
+    "SYS_STATUS": sys_status,
+    "SYSTEM_TIME": system_time,
+    "HOME_POSITION": home_position,
+    "MISSION_CURRENT": mission_current,
+    "VFR_HUD": vfr_hud,
+    "BATTERY_STATUS": battery_status,
+    "GPS_RAW_INT": gps_raw_int,
+}
