@@ -99,7 +99,7 @@ def test_defaults_agree_with_the_sih_logs_themselves(shared_data: Path) -> None:
 
 def _sitl_sources() -> str:
     folder = REPO / "operator" / "uavtest" / "sitl"
-    return "".join(p.read_text() for p in sorted(folder.glob("*.py")) if p.name != "params.py")
+    return "".join(p.read_text() for p in sorted(folder.rglob("*.py")) if p.name != "params.py")
 
 
 def test_modelled_means_read_by_the_simulator_both_ways() -> None:

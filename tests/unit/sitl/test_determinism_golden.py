@@ -187,24 +187,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "cd892ed7644a33ade9b21c822bdb2b9a01ba3b287dc1197c137119c563a38fec",
+        "7852a3f65247e56351d6b54a904133e0a65a78b9ec99ca687efce6a7f9279cad",
         "efab30fdb9430e6a57c40b31f18b85a7c4c7f598d13b80b0de9aff6ff0a49373",
     ),
     "manual_and_rtl": (
-        "5beff16db04afc721af1a6792863f498c426c689de5b3f8bb0caa94e282b711e",
+        "ac18e3eb17a464e5d93a6d2ec54f7513c0714be7b43ed845412b2a5f10959edc",
         "dfc0127caac19d4d9b38cd87ee690509676fde0f8065945286e56dcea7a23a17",
     ),
     "datalink_loss": (
-        "477b30ed0459b43f466a9ee5908a851f9552c0cfd3b3e398e0a71d3801a11502",
+        "d0e8bc1ebd17bc14075b6be270092365c8a41873a1c1bd4ff18b0bb1ebfa878b",
         "ff4898f6792fbcd984e2d98f01a426d6b5be6a9ed7dfc5aeed77b88c0382b96b",
     ),
     "crash": (
-        "a985d65532427d624d45e1b41b4941ddfaebd0fd3077b297cce29b0e565d87cb",
+        "b1cd832f5c3d946a53948e40614c83a5c299cb84f4caa2f1e5278a43ecf7c741",
         "df3f32f73ba5921f4abab5f41022e0698642694272a1148a0969b969280e7215",
     ),
     "params_and_commands": (
-        "ee9e502c216cea26667c1393f0890a4d2ae95c21e22839f57a852b506171992c",
-        "d9e9c4780f7ae29e8b07f724185bbf9d13da0d19a187016a796ae74e71caeb04",
+        "18676b70e7bed8ac8f46779bb0d833257c5d8a9643e60f3909407a6f41939ea1",
+        "2870cadfb5f6d1332a92de207f90d1d01c3f69d5b0bf85d484ea5f47d97d632e",
     ),
 }
 
