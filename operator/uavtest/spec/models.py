@@ -10,7 +10,7 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 from pydantic.alias_generators import to_camel
 
 from uavtest.spec.bounds import (
@@ -472,6 +472,12 @@ class Fault(Model):
     unit: FaultUnit
     type: FaultType
     instance: FaultInstance = Field(0, description="0: all instances; motor: 1..N; sensors: instance + 1")
+
+    @field_validator("type", mode="before")
+    @classmethod
+    def _bare_off(cls, value: object) -> object:
+        """YAML 1.1 reads a bare ``off`` as false: take it as the failure type off."""
+        return "off" if value is False else value
 
 
 # --------------------------------------------------------------------------- assertions
