@@ -71,7 +71,6 @@ def wire(msg: object) -> mavlink2.MAVLink_message:
 def test_new_mavlink_numbers_match_pymavlink() -> None:
     for name in ("DO_ORBIT", "CONDITION_YAW", "DO_LAND_START", "DO_REPOSITION", "INJECT_FAILURE"):
         assert getattr(mavlink2, f"MAV_CMD_{name}") == mav.MavCmd[name]
-    assert mav.MavResult.CANCELLED == 6  # PX4 VEHICLE_CMD_RESULT_CANCELLED (not in this pymavlink)
     for frame in mav.MavFrame:
         assert getattr(mavlink2, f"MAV_FRAME_{frame.name}") == frame
     for bit in mav.PositionTargetMask:
@@ -409,3 +408,25 @@ def test_flight_intent_of_offboard_goto_and_orbit(
     commands: list[dict[str, object]], reason: str | None
 ) -> None:
     assert flight_intent(UavTestSpec.model_validate({"commands": commands})) == reason
+
+
+def test_faults_go_into_result_json() -> None:
+    from uavtest.analysis.models import ReplicaResult, Verdict
+    from uavtest.runner.commands import FaultRecord
+    from uavtest.runner.core import FlightReport
+    from uavtest.runner.main import injected_faults
+
+    report = FlightReport(faults=[FaultRecord("gps", "off", 0, 20.0, 20_000, 20_004, "ACCEPTED")])
+    result = ReplicaResult(index=0, seed=0, verdict=Verdict.PASS, faults=injected_faults(report))
+    dumped = result.model_dump(mode="json")["faults"]
+    assert dumped == [
+        {
+            "unit": "gps",
+            "type": "off",
+            "instance": 0,
+            "at": 20.0,
+            "sent_ms": 20000,
+            "ack_ms": 20004,
+            "result": "ACCEPTED",
+        }
+    ]
