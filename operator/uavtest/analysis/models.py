@@ -13,6 +13,7 @@ from pydantic import BaseModel, ConfigDict, Field
 __all__ = [
     "AssertionResult",
     "FlightMetrics",
+    "InjectedFault",
     "MissionProgress",
     "ReplicaResult",
     "RunSummary",
@@ -71,6 +72,18 @@ class FlightMetrics(_Result):
     )
 
 
+class InjectedFault(_Result):
+    """A fault the runner injected (MAV_CMD_INJECT_FAILURE) and how the vehicle answered."""
+
+    unit: str = Field(description="gps, motor, battery, ... (the test's faults[].unit)")
+    type: str = Field(description="off, stuck, garbage, wrong, slow, delayed, intermittent, ok")
+    instance: int = Field(0, ge=0)
+    at: float = Field(description="seconds on the vehicle clock the test asked for")
+    sent_ms: int | None = Field(None, description="vehicle ms it was sent; None: the flight ended before")
+    ack_ms: int | None = Field(None, description="vehicle ms of the COMMAND_ACK")
+    result: str | None = Field(None, description="MAV_RESULT of the ACK (ACCEPTED, DENIED, ...); None: none")
+
+
 class ReplicaResult(_Result):
     """One replica's outcome: ``result.json``."""
 
@@ -90,6 +103,9 @@ class ReplicaResult(_Result):
     warnings: list[str] = Field(
         default_factory=list,
         description="what the simulator could not simulate (e.g. PX4 SIH: obstacles, wind)",
+    )
+    faults: list[InjectedFault] = Field(
+        default_factory=list, description="the test's faults as injected, with the vehicle's answers"
     )
 
 

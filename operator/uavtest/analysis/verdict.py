@@ -46,8 +46,11 @@ __all__ = [
 
 NEVER_TOOK_OFF = "the vehicle never took off"
 
-#: modes that fly the vehicle by themselves once armed
+#: modes that fly the vehicle once armed (offboard flies the test's setpoints; without any PX4
+#: refuses it, and a refused flight is a fail with the refusal, never a pass)
 _FLYING_MODES = frozenset({FlightMode.MISSION, FlightMode.TAKEOFF, FlightMode.OFFBOARD})
+#: commands that fly the armed vehicle to a place (PX4 switches to hold / orbit)
+_FLYING_ACTIONS = frozenset({CommandAction.GOTO, CommandAction.ORBIT})
 _CLIMB_THROTTLE = 0.5  # sticks z above this climbs (0.5 holds altitude in altitude / position mode)
 
 
@@ -60,8 +63,9 @@ def flight_intent(spec: UavTestSpec, commands: Sequence[Command] | None = None) 
 
     A test flies when it has a mission, or when its commands arm the vehicle (``arm``, or
     ``mode mission`` / ``mode takeoff``, which arm first) and command flight: mode mission,
-    takeoff or offboard, or a climb on the sticks (throttle above 0.5) in manual, altitude or
-    position mode (or in no mode command at all).
+    takeoff or offboard (which flies the setpoints; PX4 refuses it without them, and the refusal
+    then makes the replica fail), goto or orbit, or a climb on the sticks (throttle above 0.5) in
+    manual, altitude or position mode (or in no mode command at all).
     """
     if spec.mission is not None:
         return "the test has a mission"
@@ -73,6 +77,8 @@ def flight_intent(spec: UavTestSpec, commands: Sequence[Command] | None = None) 
         if c.action is CommandAction.MODE and c.mode in _FLYING_MODES:
             assert c.mode is not None
             return f"mode {c.mode.value} at t={c.at:g} s"
+        if c.action in _FLYING_ACTIONS:
+            return f"{c.action.value} at t={c.at:g} s"
         if c.action is CommandAction.STICKS and c.sticks is not None and c.sticks.z > _CLIMB_THROTTLE:
             return f"sticks with thrust at t={c.at:g} s"
     return None

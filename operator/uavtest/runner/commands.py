@@ -11,6 +11,17 @@ to fly); other refusals (DENIED, TEMPORARILY_REJECTED, FAILED) are recorded in `
 flight goes on (the vehicle decided — the verdict will tell); no ACK at all, or UNSUPPORTED, is a
 bench error (``error``; for UNSUPPORTED worded by ``unsupported_reason``).
 
+Offboard setpoints (``action: setpoint``) take effect at once, like sticks: from then on
+SET_POSITION_TARGET_LOCAL_NED (or _GLOBAL_INT) goes out every ``setpoint_period_ms`` (20 Hz) of
+vehicle time, until the next setpoint replaces it, an accepted switch to another mode (``mode`` not
+offboard, ``goto``, ``orbit``, ``land_start``) or a disarm ends it. PX4 accepts offboard only once
+setpoints are streaming, so ``mode offboard`` waits until the stream has run ``offboard_warmup_ms``
+(0.5 s) of vehicle time; a test writes its first setpoint before (or at the time of) ``mode
+offboard``. Without any setpoint the mode is sent anyway and the vehicle refuses it (recorded).
+
+Faults (the test's ``faults``) are steps too, in time order with the commands: COMMAND_LONG
+MAV_CMD_INJECT_FAILURE, with the same ACK rules; each outcome is kept in ``faults``.
+
 Arm settle (``arm_settle_ms``, 0 = off): PX4's pre-arm checks pass while its estimator is still
 settling, and a takeoff commanded at that moment can stall a metre above the ground. With a settle
 time the arm waits until SYS_STATUS has reported ready-to-arm (MAV_SYS_STATUS_PREARM_CHECK) without
@@ -20,6 +31,7 @@ a break for that long; a vehicle that sends no SYS_STATUS is armed at once, and 
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections import deque
@@ -27,7 +39,22 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
 
-from uavtest.runner.events import CommandAck, CommandLong, ManualControl, Outgoing
+from uavtest.mavlink_numbers import (
+    REPOSITION_FLAGS_CHANGE_MODE,
+    FailureType,
+    FailureUnit,
+    MavFrame,
+    PositionTargetMask,
+)
+from uavtest.runner.events import (
+    CommandAck,
+    CommandInt,
+    CommandLong,
+    ManualControl,
+    Outgoing,
+    PositionTargetGlobal,
+    PositionTargetLocal,
+)
 from uavtest.runner.px4 import (
     AUTO_MODES,
     FORCE_DISARM_MAGIC,
@@ -37,10 +64,29 @@ from uavtest.runner.px4 import (
     Cmd,
     result_name,
 )
-from uavtest.spec.models import Command, CommandAction, FlightMode, Sticks
+from uavtest.spec.geo import ned_to_geodetic
+from uavtest.spec.models import (
+    Command,
+    CommandAction,
+    Fault,
+    FaultType,
+    FaultUnit,
+    FlightMode,
+    Goto,
+    Home,
+    Orbit,
+    Setpoint,
+    SetpointFrame,
+    Sticks,
+    YawCommand,
+    YawDirection,
+)
 
 __all__ = [
+    "OFFBOARD_WARMUP_MS",
+    "SETPOINT_PERIOD_MS",
     "CommandScheduler",
+    "FaultRecord",
     "Refusal",
     "Step",
     "StepKind",
@@ -48,13 +94,26 @@ __all__ = [
     "command_name",
     "disarm_command",
     "expand",
+    "fault_command",
+    "goto_command",
+    "land_start_command",
     "manual_control",
     "mode_command",
+    "orbit_command",
+    "position_target",
     "speed_command",
     "unsupported_reason",
+    "yaw_command",
 ]
 
 log = logging.getLogger(__name__)
+
+#: offboard setpoints go out every this many ms of vehicle time (20 Hz, as MAVSDK's offboard plugin)
+SETPOINT_PERIOD_MS = 50
+#: ``mode offboard`` waits until setpoints have streamed this long (PX4 wants them before the switch)
+OFFBOARD_WARMUP_MS = 500
+#: COMMAND_INT x / y meaning "not given" (PX4 turns it into NaN: the current position)
+INT32_MAX = 2**31 - 1
 
 
 class StepKind(Enum):
@@ -63,15 +122,43 @@ class StepKind(Enum):
     MODE = "mode"
     SPEED = "speed"
     STICKS = "sticks"
+    SETPOINT = "setpoint"
+    GOTO = "goto"
+    ORBIT = "orbit"
+    LAND_START = "land_start"
+    YAW = "yaw"
+    FAULT = "fault"
+
+
+#: steps that, once accepted, put the vehicle in a mode other than offboard: setpoints stop
+_LEAVES_OFFBOARD = frozenset({StepKind.GOTO, StepKind.ORBIT, StepKind.LAND_START})
 
 
 @dataclass(frozen=True, slots=True)
 class Step:
     kind: StepKind
     label: str
-    command: CommandLong | None = None  # None for sticks
+    command: CommandLong | CommandInt | None = None  # None for sticks and setpoints
     mode: FlightMode | None = None
     sticks: ManualControl | None = None
+    setpoint: PositionTargetLocal | PositionTargetGlobal | None = None  # time_ms filled when sent
+    fault: Fault | None = None
+
+
+@dataclass(slots=True)
+class FaultRecord:
+    """One injected fault: when it was due and sent, and how the vehicle answered."""
+
+    unit: str
+    type: str
+    instance: int
+    at: float  # seconds on the vehicle clock, from the test
+    sent_ms: int | None = None  # vehicle time it was (first) sent
+    ack_ms: int | None = None
+    result: str | None = None  # MAV_RESULT name; None: not answered (yet)
+
+    def to_json(self) -> dict[str, object]:
+        return dataclasses.asdict(self)
 
 
 @dataclass(frozen=True, slots=True)
@@ -125,16 +212,166 @@ def speed_command(speed: float) -> CommandLong:
     return CommandLong(Cmd.DO_CHANGE_SPEED, (1.0, float(speed), -1.0, 0, 0, 0, 0))
 
 
+def _mask(**ignored: bool) -> int:
+    """POSITION_TARGET_TYPEMASK with the IGNORE bit of every field named True (accelerations are
+    always ignored, FORCE_SET never set)."""
+    mask = PositionTargetMask.AX_IGNORE | PositionTargetMask.AY_IGNORE | PositionTargetMask.AZ_IGNORE
+    for name, ignore in ignored.items():
+        if ignore:
+            mask |= PositionTargetMask[f"{name.upper()}_IGNORE"]
+    return int(mask)
+
+
+def position_target(setpoint: Setpoint) -> PositionTargetLocal | PositionTargetGlobal:
+    """The SET_POSITION_TARGET message of a setpoint (time_ms 0: stamped when sent). Degrees
+    become radians; a field not given is flagged ignored in type_mask and sent as 0."""
+    sp = setpoint
+
+    def v(value: float | None) -> float:
+        return 0.0 if value is None else float(value)
+
+    yaw = math.radians(v(sp.yaw))
+    yaw_rate = math.radians(v(sp.yaw_rate))
+    velocity = dict(vx=sp.vx is None, vy=sp.vy is None, vz=sp.vz is None)
+    yaws = dict(yaw=sp.yaw is None, yaw_rate=sp.yaw_rate is None)
+    if sp.frame is SetpointFrame.GLOBAL:
+        no_position = sp.lat is None
+        mask = _mask(x=no_position, y=no_position, z=no_position, **velocity, **yaws)
+        return PositionTargetGlobal(
+            0, mask, round(v(sp.lat) * 1e7), round(v(sp.lon) * 1e7), v(sp.alt),
+            v(sp.vx), v(sp.vy), v(sp.vz), yaw, yaw_rate,
+        )  # fmt: skip
+    mask = _mask(x=sp.x is None, y=sp.y is None, z=sp.z is None, **velocity, **yaws)
+    return PositionTargetLocal(
+        0, mask, v(sp.x), v(sp.y), v(sp.z), v(sp.vx), v(sp.vy), v(sp.vz), yaw, yaw_rate
+    )
+
+
+def _global_point(
+    home: Home, x: float | None, y: float | None, lat: float | None, lon: float | None
+) -> tuple[int, int]:
+    """COMMAND_INT x / y (degE7) of a local or global point; INT32_MAX when neither is given."""
+    if x is not None and y is not None:
+        lat, lon = ned_to_geodetic(x, y, home.lat, home.lon)
+    if lat is None or lon is None:
+        return INT32_MAX, INT32_MAX
+    return round(lat * 1e7), round(lon * 1e7)
+
+
+def goto_command(goto: Goto, home: Home) -> CommandInt:
+    """COMMAND_INT MAV_CMD_DO_REPOSITION as MAVSDK's goto_location and QGC send it: frame
+    MAV_FRAME_GLOBAL (altitude AMSL: PX4 ignores the frame and reads z as AMSL), param1 speed
+    (-1: the vehicle's), param2 MAV_DO_REPOSITION_FLAGS_CHANGE_MODE (PX4 answers UNSUPPORTED
+    without it), param4 yaw in radians as PX4 reads it (NaN: keep the vehicle's)."""
+    lat, lon = _global_point(home, goto.x, goto.y, goto.lat, goto.lon)
+    amsl = home.alt - goto.z if goto.z is not None else home.alt + (goto.alt or 0.0)
+    yaw = math.radians(goto.yaw) if goto.yaw is not None else math.nan
+    params = (goto.speed if goto.speed is not None else -1.0, float(REPOSITION_FLAGS_CHANGE_MODE), 0.0, yaw)
+    return CommandInt(Cmd.DO_REPOSITION, MavFrame.GLOBAL, params, lat, lon, float(amsl))
+
+
+def orbit_command(orbit: Orbit, home: Home) -> CommandInt:
+    """COMMAND_INT MAV_CMD_DO_ORBIT: param1 radius (negative: counter-clockwise), param2 tangential
+    velocity (NaN: PX4's), param3 yaw behaviour NaN (PX4's default), param4 0 orbits (forever);
+    x / y the centre (INT32_MAX: where the vehicle is), z AMSL (NaN: the current altitude)."""
+    lat, lon = _global_point(home, orbit.x, orbit.y, None, None)
+    radius = orbit.radius if orbit.clockwise else -orbit.radius
+    velocity = orbit.velocity if orbit.velocity is not None else math.nan
+    amsl = home.alt - orbit.z if orbit.z is not None else math.nan
+    return CommandInt(Cmd.DO_ORBIT, MavFrame.GLOBAL, (radius, velocity, math.nan, 0.0), lat, lon, amsl)
+
+
+def land_start_command() -> CommandLong:
+    """MAV_CMD_DO_LAND_START: jump to the mission's landing sequence (lat / lon 0: the nearest)."""
+    return CommandLong(Cmd.DO_LAND_START, (0.0,) * 7)
+
+
+_YAW_DIRECTION = {
+    YawDirection.COUNTER_CLOCKWISE: -1.0,
+    YawDirection.SHORTEST: 0.0,
+    YawDirection.CLOCKWISE: 1.0,
+}
+
+
+def yaw_command(yaw: YawCommand) -> CommandLong:
+    """MAV_CMD_CONDITION_YAW: param1 heading deg (absolute: 0..360), param2 rate deg/s (0: the
+    vehicle's), param3 direction (-1 ccw, 0 shortest, 1 cw), param4 1 relative / 0 absolute."""
+    heading = yaw.heading if yaw.relative else yaw.heading % 360.0
+    rate = abs(yaw.rate) if yaw.rate is not None else 0.0
+    params = (heading, rate, _YAW_DIRECTION[yaw.direction], 1.0 if yaw.relative else 0.0, 0.0, 0.0, 0.0)
+    return CommandLong(Cmd.CONDITION_YAW, params)
+
+
+_FAILURE_UNIT = {
+    FaultUnit.GYRO: FailureUnit.SENSOR_GYRO,
+    FaultUnit.ACCEL: FailureUnit.SENSOR_ACCEL,
+    FaultUnit.MAG: FailureUnit.SENSOR_MAG,
+    FaultUnit.BARO: FailureUnit.SENSOR_BARO,
+    FaultUnit.GPS: FailureUnit.SENSOR_GPS,
+    FaultUnit.OPTICAL_FLOW: FailureUnit.SENSOR_OPTICAL_FLOW,
+    FaultUnit.VIO: FailureUnit.SENSOR_VIO,
+    FaultUnit.DISTANCE_SENSOR: FailureUnit.SENSOR_DISTANCE_SENSOR,
+    FaultUnit.AIRSPEED: FailureUnit.SENSOR_AIRSPEED,
+    FaultUnit.BATTERY: FailureUnit.SYSTEM_BATTERY,
+    FaultUnit.MOTOR: FailureUnit.SYSTEM_MOTOR,
+    FaultUnit.SERVO: FailureUnit.SYSTEM_SERVO,
+    FaultUnit.AVOIDANCE: FailureUnit.SYSTEM_AVOIDANCE,
+    FaultUnit.RC_SIGNAL: FailureUnit.SYSTEM_RC_SIGNAL,
+    FaultUnit.MAVLINK_SIGNAL: FailureUnit.SYSTEM_MAVLINK_SIGNAL,
+}
+
+
+def fault_command(fault: Fault) -> CommandLong:
+    """COMMAND_LONG MAV_CMD_INJECT_FAILURE: param1 FAILURE_UNIT, param2 FAILURE_TYPE, param3 instance."""
+    unit = _FAILURE_UNIT[fault.unit]
+    kind = FailureType[FaultType(fault.type).name]
+    return CommandLong(Cmd.INJECT_FAILURE, (float(unit), float(kind), float(fault.instance), 0, 0, 0, 0))
+
+
+def fault_label(fault: Fault) -> str:
+    instance = f" #{fault.instance}" if fault.instance else ""
+    return f"fault {fault.unit.value}{instance} {fault.type.value}"
+
+
 def manual_control(sticks: Sticks) -> ManualControl:
     return ManualControl(
         x=round(sticks.x * 1000), y=round(sticks.y * 1000), z=round(sticks.z * 1000), r=round(sticks.r * 1000)
     )
 
 
-def expand(command: Command) -> list[Step]:
-    """The steps of one command (before knowing whether the vehicle is armed: arming is skipped
-    at run time when it already is)."""
+def _setpoint_label(sp: Setpoint) -> str:
+    given = {k: v for k, v in sp.dump().items() if k != "frame"}
+    frame = " global" if sp.frame is SetpointFrame.GLOBAL else ""
+    return "setpoint" + frame + " " + ",".join(f"{k}={v:g}" for k, v in given.items())
+
+
+def expand(command: Command | Fault, home: Home | None = None) -> list[Step]:
+    """The steps of one command or fault (before knowing whether the vehicle is armed: arming is
+    skipped at run time when it already is). ``home`` places local goto / orbit points."""
+    home = home or Home()
+    if isinstance(command, Fault):
+        return [Step(StepKind.FAULT, fault_label(command), fault_command(command), fault=command)]
     action = command.action
+    if action is CommandAction.SETPOINT:
+        assert command.setpoint is not None
+        sp = command.setpoint
+        return [Step(StepKind.SETPOINT, _setpoint_label(sp), setpoint=position_target(sp))]
+    if action is CommandAction.GOTO:
+        assert command.goto is not None
+        point = ",".join(f"{k}={v:g}" for k, v in command.goto.dump().items())
+        return [Step(StepKind.GOTO, f"goto {point}", goto_command(command.goto, home))]
+    if action is CommandAction.ORBIT:
+        assert command.orbit is not None
+        o = command.orbit
+        label = f"orbit r={o.radius:g}" + ("" if o.clockwise else " counter-clockwise")
+        return [Step(StepKind.ORBIT, label, orbit_command(o, home))]
+    if action is CommandAction.LAND_START:
+        return [Step(StepKind.LAND_START, "land_start", land_start_command())]
+    if action is CommandAction.YAW:
+        assert command.yaw is not None
+        y = command.yaw
+        label = f"yaw {y.heading:g}" + (" relative" if y.relative else "")
+        return [Step(StepKind.YAW, label, yaw_command(y))]
     if action is CommandAction.ARM:
         return [Step(StepKind.ARM, "arm", arm_command())]
     if action is CommandAction.DISARM:
@@ -160,15 +397,21 @@ class CommandScheduler:
         self,
         commands: Sequence[Command],
         *,
+        faults: Sequence[Fault] = (),
+        home: Home | None = None,
         ack_timeout_s: float = 1.0,
         send_attempts: int = 5,
         arm_retry_ms: int = 1000,
         arm_give_up_ms: int = 60_000,
         arm_settle_ms: int = 0,
         stick_period_ms: int = 50,
+        setpoint_period_ms: int = SETPOINT_PERIOD_MS,
+        offboard_warmup_ms: int = OFFBOARD_WARMUP_MS,
         simulator: str | None = None,
     ) -> None:
-        self._pending = deque(sorted(commands, key=lambda c: c.at))
+        # commands before faults at the same time (stable sort)
+        self._pending: deque[Command | Fault] = deque(sorted([*commands, *faults], key=lambda c: c.at))
+        self.home = home or Home()
         self._steps: deque[Step] = deque()
         self.ack_timeout_s = ack_timeout_s
         self.send_attempts = send_attempts
@@ -176,6 +419,8 @@ class CommandScheduler:
         self.arm_give_up_ms = arm_give_up_ms
         self.arm_settle_ms = arm_settle_ms
         self.stick_period_ms = stick_period_ms
+        self.setpoint_period_ms = setpoint_period_ms
+        self.offboard_warmup_ms = offboard_warmup_ms
         self.simulator = simulator  # "builtin" / "px4" / None: how UNSUPPORTED is worded
         self.error: str | None = None
         self.notes: list[str] = []  # refusals the vehicle made; shown in the log and the result
@@ -185,6 +430,11 @@ class CommandScheduler:
         self.sent: list[tuple[int, str]] = []  # (vehicle ms, label) of every step started
         self.sticks: ManualControl | None = None
         self._last_stick_ms = -math.inf
+        self.setpoint: PositionTargetLocal | PositionTargetGlobal | None = None  # being streamed
+        self._last_setpoint_ms = -math.inf
+        self._setpoint_since_ms: int | None = None  # vehicle time the stream started
+        self._hold_until_ms: float | None = None  # mode offboard waits for the stream to warm up
+        self.faults: list[FaultRecord] = []  # every fault sent, with its answer
         self._current: Step | None = None
         self._confirmation = 0
         self._ack_deadline = math.inf
@@ -212,10 +462,19 @@ class CommandScheduler:
 
     @property
     def next_event_ms(self) -> float:
-        """Vehicle time of the next thing to do on the vehicle clock: a command not yet due or a
-        refused arm's retry (inf when none)."""
+        """Vehicle time of the next thing to do on the vehicle clock: a command not yet due, a
+        refused arm's retry, a mode offboard waiting for setpoints, the next setpoint (inf when
+        none)."""
         retry = self._retry_at_ms if self._retry_at_ms is not None else math.inf
-        return min(self.next_at_ms, retry)
+        hold = self._hold_until_ms if self._hold_until_ms is not None else math.inf
+        return min(self.next_at_ms, retry, hold, self.next_setpoint_ms)
+
+    @property
+    def next_setpoint_ms(self) -> float:
+        """Vehicle time the next offboard setpoint is due (inf when none is streaming)."""
+        if self.setpoint is None:
+            return math.inf
+        return self._last_setpoint_ms + self.setpoint_period_ms
 
     @property
     def ack_deadline(self) -> float:
@@ -244,15 +503,44 @@ class CommandScheduler:
             return []
         out: list[Outgoing] = []
         while self._pending and self._pending[0].at * 1000.0 <= now_ms:
-            self._steps.extend(expand(self._pending.popleft()))
+            self._steps.extend(expand(self._pending.popleft(), self.home))
         if self._current is not None:
             out += self._resend_if_due(now_ms, wall)
         while self._current is None and self._steps and not self.error:
+            if self._warming_up(self._steps[0], now_ms):
+                break
             out += self._start(self._steps.popleft(), now_ms, wall, armed=armed)
         if self.sticks is not None and now_ms - self._last_stick_ms >= self.stick_period_ms:
             self._last_stick_ms = now_ms
             out.append(self.sticks)
+        if self.setpoint is not None and now_ms - self._last_setpoint_ms >= self.setpoint_period_ms:
+            self._last_setpoint_ms = now_ms
+            out.append(dataclasses.replace(self.setpoint, time_ms=now_ms))
         return out
+
+    def _warming_up(self, step: Step, now_ms: int) -> bool:
+        """A mode offboard waits until setpoints have streamed ``offboard_warmup_ms``."""
+        self._hold_until_ms = None
+        if step.kind is not StepKind.MODE or step.mode is not FlightMode.OFFBOARD:
+            return False
+        if self._setpoint_since_ms is None:
+            log.warning(
+                "t=%.2f s: %s with no setpoint streaming: PX4 refuses offboard until setpoints arrive "
+                "(write an action: setpoint before it)",
+                now_ms / 1000,
+                step.label,
+            )
+            return False
+        ready = self._setpoint_since_ms + self.offboard_warmup_ms
+        if now_ms >= ready:
+            return False
+        self._hold_until_ms = ready
+        return True
+
+    def _stop_setpoints(self) -> None:
+        self.setpoint = None
+        self._setpoint_since_ms = None
+        self._last_setpoint_ms = -math.inf
 
     def _start(self, step: Step, now_ms: int, wall: float, *, armed: bool) -> list[Outgoing]:
         if step.kind is StepKind.ARM and armed:
@@ -283,8 +571,19 @@ class CommandScheduler:
             self.sticks = step.sticks
             self._last_stick_ms = -math.inf
             return []
+        if step.kind is StepKind.SETPOINT:
+            if self.setpoint is None:
+                self._setpoint_since_ms = now_ms
+            self.setpoint = step.setpoint
+            self._last_setpoint_ms = -math.inf  # the new one goes out at once (update streams it)
+            return []
         if step.kind is StepKind.DISARM:
             self.sticks = None
+            self._stop_setpoints()
+        if step.kind is StepKind.FAULT:
+            f = step.fault
+            assert f is not None
+            self.faults.append(FaultRecord(f.unit.value, f.type.value, f.instance, f.at, sent_ms=now_ms))
         assert step.command is not None
         self._current = step
         self._sent_ms = now_ms
@@ -319,6 +618,14 @@ class CommandScheduler:
         if wall < self._ack_deadline:
             return []
         if self._confirmation + 1 >= self.send_attempts:
+            if step.kind is StepKind.FAULT:
+                self.error = (
+                    f"no COMMAND_ACK for {step.label} (MAV_CMD_INJECT_FAILURE) after {self.send_attempts} "
+                    "tries: the vehicle did not confirm the failure (PX4 answers only for the units "
+                    "one of its modules simulates)"
+                )
+                self._ack_deadline = math.inf
+                return []
             self.error = f"no COMMAND_ACK for {step.label} after {self.send_attempts} tries"
             self._ack_deadline = math.inf
             return []
@@ -326,6 +633,8 @@ class CommandScheduler:
         self._ack_deadline = wall + self.ack_timeout_s
         log.warning("no ACK for %s; sending it again (%d)", step.label, self._confirmation + 1)
         c = step.command
+        if isinstance(c, CommandInt):
+            return [c]  # COMMAND_INT has no confirmation counter
         return [CommandLong(c.command, c.params, confirmation=self._confirmation)]
 
     def handle_ack(self, ack: CommandAck, now_ms: int, wall: float) -> Step | None:
@@ -334,11 +643,18 @@ class CommandScheduler:
         if step is None or step.command is None or ack.command != step.command.command:
             return None
         result = ack.result
+        if step.kind is StepKind.FAULT and result != AckResult.IN_PROGRESS and self.faults:
+            self.faults[-1].ack_ms = now_ms
+            self.faults[-1].result = result_name(AckResult, result)
         if result == AckResult.ACCEPTED:
             if self._retrying_refusal():
                 self.refusals.pop()  # the vehicle armed in the end
             if step.kind is StepKind.MODE and step.mode in AUTO_MODES:
                 self.sticks = None
+            if (step.kind is StepKind.MODE and step.mode is not FlightMode.OFFBOARD) or (
+                step.kind in _LEAVES_OFFBOARD
+            ):
+                self._stop_setpoints()
             self._done()
             return step
         if result == AckResult.IN_PROGRESS:
@@ -346,7 +662,13 @@ class CommandScheduler:
             return None
         name = result_name(AckResult, result)
         if result == AckResult.UNSUPPORTED:
-            what = step.label if step.kind is StepKind.MODE else command_name(ack.command)
+            if step.kind is StepKind.MODE:
+                what = step.label
+            elif step.kind is StepKind.FAULT:
+                assert step.fault is not None
+                what = f"failure injection of {step.fault.unit.value}/{step.fault.type.value}"
+            else:
+                what = command_name(ack.command)
             self.error = unsupported_reason(what, self.simulator)
             self._done()
             return None

@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 
-from uavtest.runner.commands import CommandScheduler, Refusal, StepKind, disarm_command
+from uavtest.runner.commands import CommandScheduler, FaultRecord, Refusal, StepKind, disarm_command
 from uavtest.runner.events import (
     CommandAck,
     ExtendedSysState,
@@ -50,7 +50,7 @@ from uavtest.runner.mission import MissionUploader
 from uavtest.runner.monitor import FlightMonitor
 from uavtest.runner.params import ParamSetter
 from uavtest.runner.px4 import AckResult, Autopilot, Cmd, LandedState, MavType, mode_name, result_name
-from uavtest.spec.models import Command, Geofence, Obstacle
+from uavtest.spec.models import Command, Fault, Geofence, Home, Obstacle
 
 __all__ = ["ARM_GRACE_MS", "CoreConfig", "Ending", "FlightReport", "ReplicaCore", "Stage"]
 
@@ -87,6 +87,8 @@ class CoreConfig:
     params: dict[str, float | int] = field(default_factory=dict)
     mission: Sequence[MissionItemInt] = ()
     commands: Sequence[Command] = ()
+    faults: Sequence[Fault] = ()  # injected with MAV_CMD_INJECT_FAILURE (params must enable it)
+    home: Home = field(default_factory=Home)  # places local goto / orbit points
     obstacles: Sequence[Obstacle] = ()
     geofence: Geofence | None = None
     timeout_s: float = 600.0  # vehicle seconds from the start of the flight stage
@@ -123,6 +125,7 @@ class FlightReport:
     status_texts: list[str] = field(default_factory=list)
     status_log: list[tuple[int, int, str]] = field(default_factory=list)  # (vehicle ms, severity, text)
     refusals: list[Refusal] = field(default_factory=list)  # commands the vehicle refused
+    faults: list[FaultRecord] = field(default_factory=list)  # faults injected, with their ACKs
     grants: int = 0
     log_data: bytes | None = None
     flight_wall: tuple[float, float] | None = None  # wall clock at the flight stage's start and end
@@ -149,6 +152,8 @@ class ReplicaCore:
         self.uploader = MissionUploader(config.mission, retry_s=config.retry_s)
         self.scheduler = CommandScheduler(
             config.commands,
+            faults=config.faults,
+            home=config.home,
             ack_timeout_s=config.retry_s,
             arm_settle_ms=round(config.arm_settle_s * 1000),
             simulator=config.simulator,
@@ -474,6 +479,7 @@ class ReplicaCore:
         rep.geofence_violation = mon.geofence_violation
         rep.notes.extend(self.scheduler.notes)
         rep.refusals = list(self.scheduler.refusals)
+        rep.faults = list(self.scheduler.faults)
 
     def _send_disarm(self, wall: float) -> list[Outgoing]:
         self._settle_tries += 1

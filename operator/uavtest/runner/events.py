@@ -14,6 +14,7 @@ from uavtest.mavlink_numbers import SYS_STATUS_PREARM_CHECK
 __all__ = [
     "ARMED_FLAG",
     "CommandAck",
+    "CommandInt",
     "CommandLong",
     "ExtendedSysState",
     "GcsHeartbeat",
@@ -39,6 +40,8 @@ __all__ = [
     "ParamRequestRead",
     "ParamSet",
     "ParamValue",
+    "PositionTargetGlobal",
+    "PositionTargetLocal",
     "StatusText",
     "SysStatus",
     "VehicleTime",
@@ -265,6 +268,67 @@ class CommandLong:
 
 
 @dataclass(frozen=True, slots=True)
+class CommandInt:
+    """COMMAND_INT: params 1-4, x / y latitude / longitude in degE7, z altitude in ``frame``."""
+
+    command: int
+    frame: int
+    params: tuple[float, float, float, float] = (0.0,) * 4
+    x: int = 0
+    y: int = 0
+    z: float = 0.0
+
+    def __post_init__(self) -> None:
+        if len(self.params) != 4:
+            raise ValueError("COMMAND_INT has exactly 4 params (5-7 are x, y, z)")
+        for name in ("x", "y"):
+            if not -(2**31) <= getattr(self, name) < 2**31:
+                raise ValueError(f"COMMAND_INT {name} must fit INT32")
+
+
+@dataclass(frozen=True, slots=True)
+class PositionTargetLocal:
+    """SET_POSITION_TARGET_LOCAL_NED in MAV_FRAME_LOCAL_NED: metres, m/s, radians, rad/s; a set
+    bit of ``type_mask`` (POSITION_TARGET_TYPEMASK) ignores its field."""
+
+    time_ms: int
+    type_mask: int
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    vx: float = 0.0
+    vy: float = 0.0
+    vz: float = 0.0
+    yaw: float = 0.0
+    yaw_rate: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.type_mask <= 0xFFFF:
+            raise ValueError("type_mask is a UINT16")
+
+
+@dataclass(frozen=True, slots=True)
+class PositionTargetGlobal:
+    """SET_POSITION_TARGET_GLOBAL_INT in MAV_FRAME_GLOBAL_RELATIVE_ALT_INT: degE7, metres above
+    home, m/s NED, radians, rad/s."""
+
+    time_ms: int
+    type_mask: int
+    lat: int = 0
+    lon: int = 0
+    alt: float = 0.0
+    vx: float = 0.0
+    vy: float = 0.0
+    vz: float = 0.0
+    yaw: float = 0.0
+    yaw_rate: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.type_mask <= 0xFFFF:
+            raise ValueError("type_mask is a UINT16")
+
+
+@dataclass(frozen=True, slots=True)
 class ManualControl:
     """MANUAL_CONTROL: x, y, r in [-1000, 1000]; z (throttle) in [0, 1000], 500 holds altitude."""
 
@@ -318,7 +382,10 @@ Outgoing = (
     | MissionCount
     | MissionItemInt
     | CommandLong
+    | CommandInt
     | ManualControl
+    | PositionTargetLocal
+    | PositionTargetGlobal
     | LockstepGrant
     | LogRequestList
     | LogRequestData

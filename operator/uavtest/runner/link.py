@@ -23,8 +23,10 @@ from pymavlink.dialects.v20 import common as mavlink2
 from pymavlink.generator import mavcrc
 
 from uavtest.errors import BadInput, InfrastructureError
+from uavtest.mavlink_numbers import MavFrame
 from uavtest.runner.events import (
     CommandAck,
+    CommandInt,
     CommandLong,
     ExtendedSysState,
     GcsHeartbeat,
@@ -49,6 +51,8 @@ from uavtest.runner.events import (
     ParamRequestRead,
     ParamSet,
     ParamValue,
+    PositionTargetGlobal,
+    PositionTargetLocal,
     StatusText,
     SysStatus,
     VehicleTime,
@@ -212,6 +216,20 @@ class MavlinkCodec:
             m = mav.heartbeat_encode(6, 8, 0, 0, 4)  # MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, MAV_STATE_ACTIVE
         elif isinstance(msg, CommandLong):
             m = mav.command_long_encode(ts, tc, msg.command, msg.confirmation, *msg.params)
+        elif isinstance(msg, CommandInt):
+            m = mav.command_int_encode(
+                ts, tc, msg.frame, msg.command, 0, 0, *msg.params, msg.x, msg.y, msg.z
+            )  # current 0, autocontinue 0
+        elif isinstance(msg, PositionTargetLocal):
+            m = mav.set_position_target_local_ned_encode(
+                msg.time_ms, ts, tc, MavFrame.LOCAL_NED, msg.type_mask,
+                msg.x, msg.y, msg.z, msg.vx, msg.vy, msg.vz, 0, 0, 0, msg.yaw, msg.yaw_rate,
+            )  # fmt: skip
+        elif isinstance(msg, PositionTargetGlobal):
+            m = mav.set_position_target_global_int_encode(
+                msg.time_ms, ts, tc, MavFrame.GLOBAL_RELATIVE_ALT_INT, msg.type_mask,
+                msg.lat, msg.lon, msg.alt, msg.vx, msg.vy, msg.vz, 0, 0, 0, msg.yaw, msg.yaw_rate,
+            )  # fmt: skip
         elif isinstance(msg, ParamRequestRead):
             m = mav.param_request_read_encode(ts, tc, msg.name.encode(), -1)
         elif isinstance(msg, ParamSet):

@@ -18,7 +18,7 @@ from types import FrameType
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from uavtest.analysis.models import ReplicaResult, Verdict
+from uavtest.analysis.models import InjectedFault, ReplicaResult, Verdict
 from uavtest.errors import BadInput, ExitCode, InfrastructureError, UavTestError
 from uavtest.runner.analyse import Analysis, analyse
 from uavtest.runner.artifacts import ReplicaPlace, store_artifacts
@@ -80,6 +80,11 @@ def exit_code(result: ReplicaResult) -> ExitCode:
         Verdict.FAIL: ExitCode.FAIL,
         Verdict.ERROR: ExitCode.INFRASTRUCTURE,
     }[result.verdict]
+
+
+def injected_faults(report: FlightReport) -> list[InjectedFault]:
+    """The faults the flight injected, for result.json."""
+    return [InjectedFault.model_validate(f.to_json()) for f in report.faults]
 
 
 def _collect_log(opts: RunnerOptions, report: FlightReport, since: float) -> tuple[Path | None, str | None]:
@@ -185,7 +190,9 @@ def run_replica(opts: RunnerOptions, *, store: ArtifactStore | None = None) -> t
     result, stored = store_artifacts(
         store,
         place,
-        analysis.result.model_copy(update={"unmodelled_params": unmodelled}),
+        analysis.result.model_copy(
+            update={"unmodelled_params": unmodelled, "faults": injected_faults(report)}
+        ),
         log_bytes=log_bytes,
         trajectory=analysis.trajectory,
     )

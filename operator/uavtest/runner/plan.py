@@ -11,7 +11,7 @@ from uavtest.spec.commands import resolved_commands
 from uavtest.spec.mission import mission_items
 from uavtest.spec.models import Command, CommandAction, FlightMode, Simulator, UavTestSpec
 
-__all__ = ["PX4_ARM_SETTLE_S", "default_arm_settle", "flight_commands", "plan_flight"]
+__all__ = ["PX4_ARM_SETTLE_S", "default_arm_settle", "flight_commands", "flight_params", "plan_flight"]
 
 log = logging.getLogger(__name__)
 
@@ -31,6 +31,16 @@ def flight_commands(spec: UavTestSpec) -> list[Command]:
     return commands
 
 
+def flight_params(spec: UavTestSpec) -> dict[str, float | int]:
+    """The parameters set before flight: the test's, plus SYS_FAILURE_EN=1 when it injects faults
+    (PX4 answers MAV_CMD_INJECT_FAILURE with DENIED unless failure injection is enabled)."""
+    params: dict[str, float | int] = dict(spec.vehicle.params)
+    if spec.faults and "SYS_FAILURE_EN" not in params:
+        log.info("the test injects faults: SYS_FAILURE_EN=1")
+        params["SYS_FAILURE_EN"] = 1
+    return params
+
+
 def plan_flight(
     spec: UavTestSpec,
     *,
@@ -44,9 +54,11 @@ def plan_flight(
     """The core's configuration for one flight of ``spec`` through ``endpoint``."""
     return CoreConfig(
         endpoint=endpoint,
-        params=dict(spec.vehicle.params),
+        params=flight_params(spec),
         mission=wire_items(mission_items(spec), spec.world.home),
         commands=flight_commands(spec),
+        faults=list(spec.faults),
+        home=spec.world.home,
         obstacles=list(spec.world.obstacles),
         geofence=spec.assertions.geofence,
         timeout_s=timeout_s if timeout_s is not None else spec.timeout,

@@ -22,24 +22,28 @@ __all__ = [
     "MAX_FILE_BYTES",
     "MAX_NODES",
     "OBSTACLE_SIZE_MAX",
+    "ORBIT_RADIUS_MAX",
     "PARAM_FLOAT_MAX",
     "PARAM_INT_MAX",
     "PARAM_INT_MIN",
     "SPEED_FACTOR_MAX",
     "SPEED_MAX",
     "WIND_MAX",
+    "YAW_RATE_MAX",
     "Altitude",
     "AltitudeAmsl",
     "Degrees",
     "Distance",
     "Down",
     "Duration",
+    "FaultInstance",
     "Height",
     "Latitude",
     "Local",
     "Longitude",
     "NonNegativeDuration",
     "ObstacleSize",
+    "OrbitRadius",
     "ParamFloat",
     "ParamInt",
     "PositiveDistance",
@@ -47,7 +51,9 @@ __all__ = [
     "Speed",
     "StickAxis",
     "Throttle",
+    "Velocity",
     "WindSpeed",
+    "YawRate",
 ]
 
 #: local NED coordinates (x North, y East) and distances: 100 km around home
@@ -61,6 +67,10 @@ OBSTACLE_SIZE_MAX = 1_000.0
 WIND_MAX = 50.0
 #: ground / climb speeds, m/s
 SPEED_MAX = 50.0
+#: yaw rates, deg/s (PX4 MPC_YAWRAUTO_MAX / MC_YAWRATE_MAX allow up to 360 deg/s)
+YAW_RATE_MAX = 360.0
+#: an orbit's radius, metres (PX4 MC_ORBIT_RAD_MAX's largest value, 1 km)
+ORBIT_RADIUS_MAX = 1_000.0
 #: simulator speed factor (times real time)
 SPEED_FACTOR_MAX = 1_000.0
 #: durations, times on the vehicle clock, timeouts: one day, seconds
@@ -94,6 +104,13 @@ Degrees = Annotated[float, Field(ge=-360, le=360, allow_inf_nan=False)]
 ObstacleSize = Annotated[float, Field(gt=0, le=OBSTACLE_SIZE_MAX, allow_inf_nan=False)]
 WindSpeed = Annotated[float, Field(ge=0, le=WIND_MAX, allow_inf_nan=False)]
 Speed = Annotated[float, Field(gt=0, le=SPEED_MAX, allow_inf_nan=False)]
+#: a velocity component (offboard setpoints), m/s, either sign
+Velocity = Annotated[float, Field(ge=-SPEED_MAX, le=SPEED_MAX, allow_inf_nan=False)]
+#: a yaw rate, deg/s, either sign
+YawRate = Annotated[float, Field(ge=-YAW_RATE_MAX, le=YAW_RATE_MAX, allow_inf_nan=False)]
+OrbitRadius = Annotated[float, Field(gt=0, le=ORBIT_RADIUS_MAX, allow_inf_nan=False)]
+#: MAV_CMD_INJECT_FAILURE param3: 0 = all instances, else the instance (motor 1..N)
+FaultInstance = Annotated[int, Field(ge=0, le=255)]
 #: a timeout or a flight time, seconds, > 0
 Duration = Annotated[float, Field(gt=0, le=DURATION_MAX, allow_inf_nan=False)]
 #: a hold time or a time on the vehicle clock, seconds, >= 0

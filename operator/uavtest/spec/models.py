@@ -10,7 +10,7 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 from pydantic.alias_generators import to_camel
 
 from uavtest.spec.bounds import (
@@ -21,12 +21,14 @@ from uavtest.spec.bounds import (
     Distance,
     Down,
     Duration,
+    FaultInstance,
     Height,
     Latitude,
     Local,
     Longitude,
     NonNegativeDuration,
     ObstacleSize,
+    OrbitRadius,
     ParamFloat,
     ParamInt,
     PositiveDistance,
@@ -34,7 +36,9 @@ from uavtest.spec.bounds import (
     Speed,
     StickAxis,
     Throttle,
+    Velocity,
     WindSpeed,
+    YawRate,
 )
 
 __all__ = [
@@ -46,15 +50,22 @@ __all__ = [
     "BoxSize",
     "Command",
     "CommandAction",
+    "Fault",
+    "FaultType",
+    "FaultUnit",
     "FlightMode",
     "Geofence",
+    "Goto",
     "Home",
     "Metadata",
     "Mission",
     "MissionItem",
     "MissionItemKind",
     "Obstacle",
+    "Orbit",
     "ReferenceTrajectory",
+    "Setpoint",
+    "SetpointFrame",
     "Similarity",
     "SimilarityMetric",
     "Simulator",
@@ -65,6 +76,8 @@ __all__ = [
     "Waypoint",
     "Wind",
     "World",
+    "YawCommand",
+    "YawDirection",
 ]
 
 API_GROUP = "uavtest.io"
@@ -247,6 +260,11 @@ class CommandAction(StrEnum):
     MODE = "mode"
     STICKS = "sticks"
     SPEED = "speed"
+    SETPOINT = "setpoint"
+    GOTO = "goto"
+    ORBIT = "orbit"
+    LAND_START = "land_start"
+    YAW = "yaw"
 
 
 class Sticks(Model):
@@ -258,6 +276,125 @@ class Sticks(Model):
     r: StickAxis = 0.0
 
 
+class SetpointFrame(StrEnum):
+    LOCAL = "local"  # SET_POSITION_TARGET_LOCAL_NED, MAV_FRAME_LOCAL_NED
+    GLOBAL = "global"  # SET_POSITION_TARGET_GLOBAL_INT, MAV_FRAME_GLOBAL_RELATIVE_ALT_INT
+
+
+def _given(model: BaseModel, *names: str) -> list[str]:
+    """The camelCase names of the fields of ``names`` that are set (not None)."""
+    return [to_camel(n) for n in names if getattr(model, n) is not None]
+
+
+class Setpoint(Model):
+    """An offboard setpoint, streamed at 20 Hz until the next one, a non-offboard mode or a disarm.
+
+    Local frame (default): position ``x, y, z`` (NED metres from home) and / or velocity
+    ``vx, vy, vz`` (NED m/s); every axis needs its position or its velocity (PX4's position
+    controller refuses a setpoint with an axis that has neither). Global frame: ``lat, lon, alt``
+    (alt metres above home), optionally with a velocity. ``yaw`` (deg) or ``yawRate`` (deg/s),
+    not both.
+    """
+
+    frame: SetpointFrame = Field(SetpointFrame.LOCAL, description="local (NED) or global (lat/lon/alt)")
+    x: Local | None = Field(None, description="North, metres")
+    y: Local | None = Field(None, description="East, metres")
+    z: Down | None = Field(None, description="Down, metres; negative is up")
+    lat: Latitude | None = Field(None, description="global frame: latitude, degrees")
+    lon: Longitude | None = Field(None, description="global frame: longitude, degrees")
+    alt: Altitude | None = Field(None, description="global frame: metres above home")
+    vx: Velocity | None = Field(None, description="North velocity, m/s")
+    vy: Velocity | None = Field(None, description="East velocity, m/s")
+    vz: Velocity | None = Field(None, description="Down velocity, m/s; negative climbs")
+    yaw: Degrees | None = Field(None, description="heading, degrees from North")
+    yaw_rate: YawRate | None = Field(None, description="yaw rate, deg/s (positive clockwise)")
+
+    @model_validator(mode="after")
+    def _px4_type_mask_rules(self) -> Setpoint:
+        if self.yaw is not None and self.yaw_rate is not None:
+            raise ValueError("give yaw or yawRate, not both (PX4 ignores one of them)")
+        if self.frame is SetpointFrame.GLOBAL:
+            wrong = _given(self, "x", "y", "z")
+            if wrong:
+                raise ValueError(f"frame global takes lat, lon, alt, not {', '.join(wrong)}")
+            position = _given(self, "lat", "lon", "alt")
+            if position and len(position) < 3:
+                raise ValueError("frame global needs all of lat, lon, alt (PX4 ignores a partial position)")
+            axes = [
+                ("lat/lon", bool(position), "vx"),
+                ("lat/lon", bool(position), "vy"),
+                ("alt", bool(position), "vz"),
+            ]
+        else:
+            wrong = _given(self, "lat", "lon", "alt")
+            if wrong:
+                raise ValueError(f"{', '.join(wrong)} only go with frame: global (local uses x, y, z)")
+            axes = [(a, getattr(self, a) is not None, f"v{a}") for a in ("x", "y", "z")]
+        missing = [f"{p} or {v}" for p, has, v in axes if not has and getattr(self, v) is None]
+        if missing:
+            raise ValueError(
+                f"a setpoint needs a position or a velocity on every axis; missing: {'; '.join(missing)}"
+            )
+        return self
+
+
+class Goto(Model):
+    """MAV_CMD_DO_REPOSITION: fly to a point and hold there (PX4 switches to hold / loiter)."""
+
+    x: Local | None = Field(None, description="North, metres")
+    y: Local | None = Field(None, description="East, metres")
+    z: Down | None = Field(None, description="Down, metres; negative is up")
+    lat: Latitude | None = Field(None, description="latitude, degrees")
+    lon: Longitude | None = Field(None, description="longitude, degrees")
+    alt: Altitude | None = Field(None, description="metres above home")
+    speed: Speed | None = Field(None, description="ground speed, m/s (default: the vehicle's cruise speed)")
+    yaw: Degrees | None = Field(None, description="heading at the target, degrees (default: the vehicle's)")
+
+    @model_validator(mode="after")
+    def _one_point(self) -> Goto:
+        local, glob = _given(self, "x", "y", "z"), _given(self, "lat", "lon", "alt")
+        if local and glob:
+            raise ValueError(f"give x, y, z or lat, lon, alt, not both (got {', '.join(local + glob)})")
+        given = local or glob
+        if len(given) != 3:
+            raise ValueError(
+                f"give all of x, y, z or all of lat, lon, alt (got {', '.join(given) or 'none'})"
+            )
+        return self
+
+
+class Orbit(Model):
+    """MAV_CMD_DO_ORBIT: circle a centre (multicopter orbit mode)."""
+
+    radius: OrbitRadius = Field(description="metres")
+    velocity: Speed | None = Field(None, description="tangential speed, m/s (default: PX4's)")
+    clockwise: bool = Field(True, description="direction seen from above")
+    x: Local | None = Field(None, description="centre North, metres (default: where the vehicle is)")
+    y: Local | None = Field(None, description="centre East, metres")
+    z: Down | None = Field(None, description="centre Down, metres (default: the current altitude)")
+
+    @model_validator(mode="after")
+    def _centre(self) -> Orbit:
+        if (self.x is None) != (self.y is None):
+            raise ValueError("give both x and y of the centre, or neither (the vehicle's position)")
+        return self
+
+
+class YawDirection(StrEnum):
+    SHORTEST = "shortest"
+    CLOCKWISE = "clockwise"
+    COUNTER_CLOCKWISE = "counterClockwise"
+
+
+class YawCommand(Model):
+    """MAV_CMD_CONDITION_YAW: turn to a heading."""
+
+    heading: Degrees = Field(description="degrees: from North (absolute) or from the current heading")
+    rate: YawRate | None = Field(None, description="deg/s (default: the vehicle's)")
+    relative: bool = Field(False, description="heading relative to the current one")
+    direction: YawDirection = YawDirection.SHORTEST
+
+
 class Command(Model):
     """A command at a time on the vehicle clock (seconds since the vehicle booted)."""
 
@@ -266,10 +403,22 @@ class Command(Model):
     mode: FlightMode | None = Field(None, description="for action mode")
     sticks: Sticks | None = Field(None, description="for action sticks")
     speed: Speed | None = Field(None, description="for action speed: ground speed m/s")
+    setpoint: Setpoint | None = Field(None, description="for action setpoint: offboard setpoint")
+    goto: Goto | None = Field(None, description="for action goto: MAV_CMD_DO_REPOSITION")
+    orbit: Orbit | None = Field(None, description="for action orbit: MAV_CMD_DO_ORBIT")
+    yaw: YawCommand | None = Field(None, description="for action yaw: MAV_CMD_CONDITION_YAW")
 
     @model_validator(mode="after")
     def _arguments_match_action(self) -> Command:
-        needs = {CommandAction.MODE: "mode", CommandAction.STICKS: "sticks", CommandAction.SPEED: "speed"}
+        needs = {
+            CommandAction.MODE: "mode",
+            CommandAction.STICKS: "sticks",
+            CommandAction.SPEED: "speed",
+            CommandAction.SETPOINT: "setpoint",
+            CommandAction.GOTO: "goto",
+            CommandAction.ORBIT: "orbit",
+            CommandAction.YAW: "yaw",
+        }
         for action, field in needs.items():
             given = getattr(self, field) is not None
             if self.action == action and not given:
@@ -277,6 +426,58 @@ class Command(Model):
             if self.action != action and given:
                 raise ValueError(f"field '{field}' only goes with action {action.value}")
         return self
+
+
+# --------------------------------------------------------------------------- faults
+
+
+class FaultUnit(StrEnum):
+    """PX4 FAILURE_UNIT (MAV_CMD_INJECT_FAILURE param1), named as PX4's ``failure`` command does."""
+
+    GYRO = "gyro"
+    ACCEL = "accel"
+    MAG = "mag"
+    BARO = "baro"
+    GPS = "gps"
+    OPTICAL_FLOW = "optical_flow"
+    VIO = "vio"
+    DISTANCE_SENSOR = "distance_sensor"
+    AIRSPEED = "airspeed"
+    BATTERY = "battery"
+    MOTOR = "motor"
+    SERVO = "servo"
+    AVOIDANCE = "avoidance"
+    RC_SIGNAL = "rc_signal"
+    MAVLINK_SIGNAL = "mavlink_signal"
+
+
+class FaultType(StrEnum):
+    """PX4 FAILURE_TYPE (MAV_CMD_INJECT_FAILURE param2)."""
+
+    OK = "ok"
+    OFF = "off"
+    STUCK = "stuck"
+    GARBAGE = "garbage"
+    WRONG = "wrong"
+    SLOW = "slow"
+    DELAYED = "delayed"
+    INTERMITTENT = "intermittent"
+
+
+class Fault(Model):
+    """A failure injected at a time on the vehicle clock (MAV_CMD_INJECT_FAILURE; the runner sets
+    SYS_FAILURE_EN=1, without which PX4 refuses it)."""
+
+    at: NonNegativeDuration = Field(description="seconds on the vehicle clock")
+    unit: FaultUnit
+    type: FaultType
+    instance: FaultInstance = Field(0, description="0: all instances; motor: 1..N; sensors: instance + 1")
+
+    @field_validator("type", mode="before")
+    @classmethod
+    def _bare_off(cls, value: object) -> object:
+        """YAML 1.1 reads a bare ``off`` as false: take it as the failure type off."""
+        return "off" if value is False else value
 
 
 # --------------------------------------------------------------------------- assertions
@@ -357,12 +558,23 @@ class UavTestSpec(Model):
         default_factory=list, max_length=20000, description="timed commands on the vehicle clock"
     )
     commands_file: str | None = Field(None, description="Aerialist commands CSV; inlined by render")
+    faults: list[Fault] = Field(
+        default_factory=list,
+        max_length=1000,
+        description="failures injected on the vehicle clock (MAV_CMD_INJECT_FAILURE; sets SYS_FAILURE_EN=1)",
+    )
     assertions: Assertions = Field(default_factory=Assertions)
 
     @model_validator(mode="after")
     def _mission_or_commands(self) -> UavTestSpec:
         if self.mission is None and not self.commands and self.commands_file is None:
             raise ValueError("a test needs a mission or commands (or both)")
+        enabled = self.vehicle.params.get("SYS_FAILURE_EN")
+        if self.faults and enabled is not None and enabled != 1:
+            raise ValueError(
+                f"faults need SYS_FAILURE_EN=1 (PX4 refuses MAV_CMD_INJECT_FAILURE otherwise); "
+                f"vehicle.params sets it to {enabled}: leave it out, the runner sets it"
+            )
         return self
 
     def replica_seed(self, index: int) -> int:

@@ -144,7 +144,8 @@ def test_unsupported_is_a_bench_error_naming_the_simulator_and_the_command(
 
 
 def test_unsupported_names_any_mav_cmd() -> None:
-    assert command_name(34) == "MAV_CMD 34"  # MAV_CMD_DO_ORBIT: no name in our table
+    assert command_name(34) == "MAV_CMD_DO_ORBIT"
+    assert command_name(9999) == "MAV_CMD 9999"  # no name in our table
     assert command_name(Cmd.COMPONENT_ARM_DISARM) == "MAV_CMD_COMPONENT_ARM_DISARM"
     assert unsupported_reason("MAV_CMD_DO_ORBIT", "builtin") == (
         "the built-in simulator does not support MAV_CMD_DO_ORBIT; fly this test with simulator: px4"
