@@ -137,6 +137,7 @@ class Vehicle:
         self.time_us = 0
         self._next_us = STEP_US
         self._tick = 0
+        self._text_id = 0  # STATUSTEXT.id of the last chunked text
         self._cmd = IDLE
         # broadcast messages (every link) are Msg; with several links, one link's telemetry is
         # (link index, Msg) in the same list, so every link sees its messages in order
@@ -453,9 +454,20 @@ class Vehicle:
 
     def text(self, severity: int, text: str) -> None:
         """A STATUSTEXT for every link, and the same line in the log."""
-        self._out.append(
-            Msg("STATUSTEXT", {"severity": int(severity), "text": text[:50], "id": 0, "chunk_seq": 0})
-        )
+        if len(text) <= 50:
+            self._out.append(
+                Msg("STATUSTEXT", {"severity": int(severity), "text": text, "id": 0, "chunk_seq": 0})
+            )
+        else:  # MAVLink 2 STATUSTEXT chunks: one id, chunk_seq 0.., a short (or empty) last chunk
+            self._text_id = self._text_id % 65535 + 1
+            for seq, i in enumerate(range(0, len(text) // 50 * 50 + 1, 50)):
+                chunk = {
+                    "severity": int(severity),
+                    "text": text[i : i + 50],
+                    "id": self._text_id,
+                    "chunk_seq": seq,
+                }
+                self._out.append(Msg("STATUSTEXT", chunk))
         level = LOG_LEVEL["info"]
         if severity <= MavSeverity.CRITICAL:
             level = LOG_LEVEL["emergency"] if severity == MavSeverity.EMERGENCY else ord("2")

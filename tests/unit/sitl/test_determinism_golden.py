@@ -204,7 +204,7 @@ GOLDEN: dict[str, tuple[str, str]] = {
     ),
     "params_and_commands": (
         "76649407b617179bbe39e9ed93c2d358e83dfe069e36ec025a89dae58944103c",
-        "f3529b5cac06b157444477d5284ee772b662cb6c2851b5f0e5d4337bf7a8eabc",
+        "3179377babd13c7ed772d66e4d9c586d12cdb471bb18a08b457c8e06d302671c",
     ),
 }
 
