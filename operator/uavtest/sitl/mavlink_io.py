@@ -14,7 +14,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 
 from uavtest.sitl.mav import COMPONENT_ID, SYSTEM_ID, Msg
 
-__all__ = ["Codec"]
+__all__ = ["Codec", "command_name", "custom_mode_name"]
 
 _Spec = tuple[type, list[tuple[str, str, int]]]
 _SPECS: dict[str, _Spec] = {}
@@ -66,3 +66,24 @@ class Codec:
             fields = {f: getattr(m, f) for f in m.get_fieldnames()}
             out.append(Msg(name, fields, m.get_srcSystem(), m.get_srcComponent()))
         return out
+
+
+def command_name(command: int) -> str:
+    """``MAV_CMD_...`` name of a command number (common.xml), or ``MAV_CMD <n>``."""
+    entry = mavlink2.enums["MAV_CMD"].get(int(command))
+    return entry.name if entry is not None else f"MAV_CMD {int(command)}"
+
+
+_MAIN_MODES = dict(
+    enumerate(("", "MANUAL", "ALTCTL", "POSCTL", "AUTO", "ACRO", "OFFBOARD", "STABILIZED", "RATTITUDE"))
+)
+_AUTO_SUB_MODES = {1: "READY", 2: "TAKEOFF", 3: "LOITER", 4: "MISSION", 5: "RTL", 6: "LAND"}
+_AUTO_SUB_MODES.update({8: "FOLLOW_TARGET", 9: "PRECLAND", 10: "VTOL_TAKEOFF"})
+
+
+def custom_mode_name(main: int, sub: int) -> str:
+    """PX4's name of a main/sub custom mode (px4_custom_mode.h), e.g. ``AUTO_FOLLOW_TARGET``."""
+    name = _MAIN_MODES.get(main, f"main {main}")
+    if main == 4:
+        return f"{name}_{_AUTO_SUB_MODES.get(sub, f'sub {sub}')}"
+    return name

@@ -188,23 +188,23 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
         "7852a3f65247e56351d6b54a904133e0a65a78b9ec99ca687efce6a7f9279cad",
-        "efab30fdb9430e6a57c40b31f18b85a7c4c7f598d13b80b0de9aff6ff0a49373",
+        "8df34c6eb356ce263b00bbc61a95f4821c4d259a382709b2fc01049095b68e98",
     ),
     "manual_and_rtl": (
         "ac18e3eb17a464e5d93a6d2ec54f7513c0714be7b43ed845412b2a5f10959edc",
-        "dfc0127caac19d4d9b38cd87ee690509676fde0f8065945286e56dcea7a23a17",
+        "8ddefffa531b7b54432b505da8da8b31e57139b9e81c8ae26ee49ed3841284bd",
     ),
     "datalink_loss": (
         "d0e8bc1ebd17bc14075b6be270092365c8a41873a1c1bd4ff18b0bb1ebfa878b",
-        "ff4898f6792fbcd984e2d98f01a426d6b5be6a9ed7dfc5aeed77b88c0382b96b",
+        "79521d72b37d5597649b604c9057f584d6799be39a3618dc5ce6cf9e9ed81982",
     ),
     "crash": (
         "b1cd832f5c3d946a53948e40614c83a5c299cb84f4caa2f1e5278a43ecf7c741",
-        "df3f32f73ba5921f4abab5f41022e0698642694272a1148a0969b969280e7215",
+        "d95db51d9b8523a9a913fa265d5f790b32164711ecb84bd4c5c945e271beca44",
     ),
     "params_and_commands": (
-        "18676b70e7bed8ac8f46779bb0d833257c5d8a9643e60f3909407a6f41939ea1",
-        "2870cadfb5f6d1332a92de207f90d1d01c3f69d5b0bf85d484ea5f47d97d632e",
+        "76649407b617179bbe39e9ed93c2d358e83dfe069e36ec025a89dae58944103c",
+        "3179377babd13c7ed772d66e4d9c586d12cdb471bb18a08b457c8e06d302671c",
     ),
 }
 
