@@ -68,6 +68,7 @@ class LockstepClient:
         self.peer: tuple[str, int] | None = None
         self.t_ms = -1
         self.received = 0
+        self.owed = False  # an announce not yet answered with a grant
 
     def send(self, msg_name: str, /, **fields: object) -> None:
         assert self.peer is not None
@@ -86,14 +87,26 @@ class LockstepClient:
         return msgs
 
     def until(self, cond, *, grant: bool = True, step_ms: int = 50) -> Msg:
+        """The first message for which ``cond`` holds; grants time on each announce while waiting.
+
+        An announce that arrives while the client is not granting (or in the same datagram as the
+        awaited message) is owed a grant: it is sent when the client next grants, else the
+        simulator would wait for it forever.
+        """
         while True:
+            if grant and self.owed:
+                self.owed = False
+                self.send(
+                    "NAMED_VALUE_INT", time_boot_ms=self.t_ms, name="LOCKSTEP", value=self.t_ms + step_ms
+                )
+            found = None
             for m in self.messages():
-                if cond(m):
-                    return m
-                if grant and m.name == "NAMED_VALUE_INT" and m.fields["name"] == "LOCKSTEP":
-                    self.send(
-                        "NAMED_VALUE_INT", time_boot_ms=self.t_ms, name="LOCKSTEP", value=self.t_ms + step_ms
-                    )
+                if m.name == "NAMED_VALUE_INT" and m.fields["name"] == "LOCKSTEP":
+                    self.owed = True
+                if found is None and cond(m):
+                    found = m
+            if found is not None:
+                return found
 
 
 def over_udp(test: Path, seed: int, step_ms: int = 50) -> tuple[float, float, float, int, float, float]:

@@ -187,3 +187,27 @@ def test_mavsdk_reads_the_new_telemetry(sim):
     assert 900 < press.absolute_pressure_hpa < 1013.25
     epoch = telemetry.unix_epoch_time()
     assert abs(epoch / 1e6 - time.time()) < 60
+
+
+def test_with_gcs_quiet_the_gcs_link_streams_only_once_a_station_spoke(tmp_path: Path) -> None:
+    """The engine's parallel replicas start `--gcs-quiet`: no telemetry into 14550 unasked."""
+    api, gcs = free_udp_port(), free_udp_port()
+    listener = connect(gcs)
+    proc = subprocess.Popen(
+        [
+            *(sys.executable, "-m", "uavtest.cli", "sitl", "--speed-factor", str(SPEED), "--gcs-quiet"),
+            *("--api-port", str(api), "--gcs-port", str(gcs), "--api-local-port", "0"),
+            *("--gcs-local-port", "0", "--log-dir", str(tmp_path / "log")),
+        ],
+    )
+    try:
+        quiet = collect(listener, 3.0)
+        assert quiet, "the heartbeat still reaches a listening station"
+        assert {m.get_type() for m in quiet} <= {"HEARTBEAT", "STATUSTEXT"}
+        listener.mav.heartbeat_send(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0)
+        spoken = collect(listener, 2.0)
+        assert {"ATTITUDE", "GLOBAL_POSITION_INT"} <= {m.get_type() for m in spoken}
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(10)
+        listener.close()

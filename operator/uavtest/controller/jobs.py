@@ -229,7 +229,7 @@ def _sitl_container(test: UavTest, settings: OperatorSettings) -> dict[str, Any]
         return container
     container["image"] = spec.vehicle.image or settings.runner_image
     container["command"] = ["/bin/sh", "-c", _SITL_SCRIPT, "uavtest-sitl"]
-    container["args"] = ["--test", _TEST_PATH, "--lockstep", "--log-dir", LOG_DIR]
+    container["args"] = ["--test", _TEST_PATH, "--lockstep", "--gcs-quiet", "--log-dir", LOG_DIR]
     return container
 
 

@@ -97,6 +97,14 @@ def sitl(
         int | None, typer.Option(help="local port of the API link (default api-port + 40; 0 = any)")
     ] = None,
     gcs_local_port: Annotated[int, typer.Option(help="local port of the GCS link (0 = any)")] = 18570,
+    gcs_quiet: Annotated[
+        bool,
+        typer.Option(
+            "--gcs-quiet",
+            help="the GCS link streams telemetry only once a ground station has spoken on it "
+            "(PX4 SITL streams from boot; the engine's parallel replicas use this)",
+        ),
+    ] = False,
     log_dir: Annotated[Path, typer.Option(help="where flight logs (.ulg) are written")] = Path("log"),
     lockstep: Annotated[
         bool, typer.Option("--lockstep", help="advance the clock only when a client grants time")
@@ -127,6 +135,7 @@ def sitl(
             gcs_port=gcs_port,
             api_local_port=api_local_port,
             gcs_local_port=gcs_local_port,
+            gcs_quiet=gcs_quiet,
             log_dir=log_dir,
             lockstep=lockstep,
             speed_factor=speed_factor,

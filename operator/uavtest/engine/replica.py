@@ -112,7 +112,8 @@ def sitl_command(
     argv += ["--host", "127.0.0.1", "--api-port", str(api_port)]
     if gcs_port is not None:
         argv += ["--gcs-port", str(gcs_port)]
-    argv += ["--api-local-port", "0", "--gcs-local-port", "0", "--log-dir", str(log_dir), "--lockstep"]
+    argv += ["--api-local-port", "0", "--gcs-local-port", "0", "--gcs-quiet", "--log-dir", str(log_dir)]
+    argv += ["--lockstep"]
     return argv
 
 

@@ -50,6 +50,7 @@ from uavtest.runner.mission import MissionUploader
 from uavtest.runner.monitor import FlightMonitor
 from uavtest.runner.params import ParamSetter
 from uavtest.runner.px4 import AckResult, Autopilot, Cmd, LandedState, MavType, mode_name, result_name
+from uavtest.runner.streams import stream_requests
 from uavtest.spec.models import Command, Fault, Geofence, Home, Obstacle
 
 __all__ = ["ARM_GRACE_MS", "CoreConfig", "Ending", "FlightReport", "ReplicaCore", "Stage"]
@@ -370,6 +371,7 @@ class ReplicaCore:
                     return out
                 log.info("connected at vehicle time %.2f s", self.now_ms / 1000)
                 self.stage = Stage.PARAMS
+                out += stream_requests()
                 out += self.params.start(wall)
             elif stage is Stage.PARAMS:
                 if not self.params.done:

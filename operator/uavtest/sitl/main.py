@@ -350,6 +350,7 @@ def run_sitl(
     gcs_port: int = 14550,
     api_local_port: int | None = None,
     gcs_local_port: int = 18570,
+    gcs_quiet: bool = False,
     log_dir: Path = Path("log"),
     lockstep: bool = False,
     speed_factor: float = 1.0,
@@ -360,7 +361,8 @@ def run_sitl(
 
     In lockstep a simulator also ends by itself (closing its log) when no client has sent
     anything for ``idle_exit_s`` wall seconds after one was heard (None or 0: never), and
-    when its parent process dies (the engine that started it is gone).
+    when its parent process dies (the engine that started it is gone). The GCS link streams
+    from boot as PX4 SITL's does, unless ``gcs_quiet``: then only once a client spoke on it.
     """
     _check_args(speed_factor, idle_exit_s)
     with _signals() as (stop, wakeup):  # before the log file appears: a SIGTERM from then on closes it
@@ -371,7 +373,13 @@ def run_sitl(
         local_api = api_port + 40 if api_local_port is None else api_local_port
         links = [
             Link("api", _bind(host, local_api), (host, api_port)),
-            Link("gcs", _bind(host, gcs_local_port), (host, gcs_port), announce=False),
+            Link(
+                "gcs",
+                _bind(host, gcs_local_port),
+                (host, gcs_port),
+                always_stream=not gcs_quiet,
+                announce=False,
+            ),
         ]
         edge = _Edge(vehicle, links, LogServer(log_folder(log_dir)), lockstep)
         log.info(

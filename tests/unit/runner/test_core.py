@@ -235,7 +235,7 @@ def test_a_mission_the_vehicle_refuses_ends_before_the_flight() -> None:
     assert core.done and core.report.ending is Ending.ERROR
     assert core.report.error == "mission upload refused after 3 attempts: MISSION_ACK NO_SPACE"
     assert core.report.start_ms is None
-    assert not any(isinstance(m, CommandLong) for m in vehicle.sent)
+    assert not any(isinstance(m, CommandLong) and m.command != Cmd.SET_MESSAGE_INTERVAL for m in vehicle.sent)
 
 
 def test_an_accepted_arm_counts_before_the_next_heartbeat_shows_it() -> None:
@@ -273,3 +273,17 @@ def test_a_refused_arm_downloads_no_log_the_vehicle_never_wrote() -> None:
     fly_lockstep(core, vehicle, [(0.0, 0.0, 0.0)], land_after=10**6)
     assert core.done and core.report.ending is Ending.REFUSED
     assert core.report.error is None and core.report.log_data is None
+
+
+def test_once_connected_the_runner_stops_the_streams_it_never_reads() -> None:
+    """PX4's ONBOARD link streams ~300 messages/s; the runner keeps what it reads, slows the rest."""
+    from uavtest.runner.streams import STREAM_INTERVALS_US
+
+    core = ReplicaCore(config())
+    vehicle = ScriptedVehicle()
+    core.start(0.0)
+    exchange(core, vehicle, [*boot(0), LockstepAnnounce(0)], wall=0.1)
+    assert vehicle.intervals == STREAM_INTERVALS_US
+    assert vehicle.intervals[30] == -1 and vehicle.intervals[105] == -1  # ATTITUDE, HIGHRES_IMU off
+    assert 32 not in vehicle.intervals and 1 not in vehicle.intervals  # LOCAL_POSITION_NED, SYS_STATUS kept
+    assert vehicle.intervals[33] == 200_000  # GLOBAL_POSITION_INT slowed to 5 Hz

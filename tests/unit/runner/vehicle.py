@@ -42,7 +42,8 @@ class ScriptedVehicle:
     refuse_arm: bool = False
     beat_on_ack: bool = True  # a heartbeat right after each COMMAND_ACK (real vehicles: 1 Hz)
     grants: list[LockstepGrant] = field(default_factory=list)
-    commands: list[CommandLong] = field(default_factory=list)
+    commands: list[CommandLong] = field(default_factory=list)  # the flight's commands
+    intervals: dict[int, float] = field(default_factory=dict)  # SET_MESSAGE_INTERVAL: msg id → µs
     sent: list[Outgoing] = field(default_factory=list)
     _count: int = 0
 
@@ -66,6 +67,9 @@ class ScriptedVehicle:
                     replies.append(MissionRequest(msg.seq + 1))
                 else:
                     replies.append(MissionAck(0))
+            elif isinstance(msg, CommandLong) and msg.command == Cmd.SET_MESSAGE_INTERVAL:
+                self.intervals[int(msg.params[0])] = msg.params[1]
+                replies.append(CommandAck(msg.command, AckResult.ACCEPTED))
             elif isinstance(msg, CommandLong):
                 self.commands.append(msg)
                 result = AckResult.ACCEPTED
