@@ -149,7 +149,9 @@ def params_and_commands() -> tuple[str, str]:
     s.command(183, 1, 1500)  # DO_SET_SERVO: unsupported
     s.command(MavCmd.DO_SET_MODE, 0, 4, 4)  # no custom flag: denied
     s.command(MavCmd.DO_SET_MODE, 1, 4, 4)  # no mission: rejected
-    s.command(MavCmd.DO_SET_MODE, 1, 6, 0)  # offboard: denied
+    s.command(MavCmd.DO_SET_MODE, 1, 6, 0)  # offboard while disarmed: accepted (PX4 v1.15)
+    s.command(MavCmd.COMPONENT_ARM_DISARM, 1)  # in offboard without setpoints: denied
+    s.command(MavCmd.DO_SET_MODE, 1, 4, 3)  # back to hold
     s.command(MavCmd.COMPONENT_ARM_DISARM, 1)
     s.fly(2)
     s.command(MavCmd.COMPONENT_ARM_DISARM, 0)  # still landed: accepted
@@ -187,24 +189,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "7852a3f65247e56351d6b54a904133e0a65a78b9ec99ca687efce6a7f9279cad",
+        "5ecb401923aa8aa43e75087136b47ce354885050dd5d7dc5a2bfd1ddb7ea61d8",
         "efab30fdb9430e6a57c40b31f18b85a7c4c7f598d13b80b0de9aff6ff0a49373",
     ),
     "manual_and_rtl": (
-        "ac18e3eb17a464e5d93a6d2ec54f7513c0714be7b43ed845412b2a5f10959edc",
+        "e36c8486a6f8e6352d15261214ecafef2cd8fbc717d0da39d286a385095ae83b",
         "dfc0127caac19d4d9b38cd87ee690509676fde0f8065945286e56dcea7a23a17",
     ),
     "datalink_loss": (
-        "d0e8bc1ebd17bc14075b6be270092365c8a41873a1c1bd4ff18b0bb1ebfa878b",
+        "bd9139ecafe42463edd4c70c592ea2db873bfaaafe4a51cc94555342b044c694",
         "ff4898f6792fbcd984e2d98f01a426d6b5be6a9ed7dfc5aeed77b88c0382b96b",
     ),
     "crash": (
-        "b1cd832f5c3d946a53948e40614c83a5c299cb84f4caa2f1e5278a43ecf7c741",
+        "fd580e2051ac0882d0954667f6353ff715b540419c6488a898c0156713a00396",
         "df3f32f73ba5921f4abab5f41022e0698642694272a1148a0969b969280e7215",
     ),
     "params_and_commands": (
-        "18676b70e7bed8ac8f46779bb0d833257c5d8a9643e60f3909407a6f41939ea1",
-        "2870cadfb5f6d1332a92de207f90d1d01c3f69d5b0bf85d484ea5f47d97d632e",
+        "aa03c30e42b636c7e155781aad881e4d2a7be20eb82b556a14aa6abf6bc34904",
+        "922ec733242654d05a5da1fb95cd689a0a96d94cb52b893db6e6fc1655dce01d",
     ),
 }
 
