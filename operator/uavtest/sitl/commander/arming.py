@@ -51,7 +51,6 @@ ARMING_CHECKS: tuple[ArmingCheck, ...] = (
         MavResult.DENIED,
         "Arming denied: no valid mission",
     ),
-    ArmingCheck(lambda v: v.nav_state == NavState.OFFBOARD, MavResult.DENIED, None),
 )
 
 
