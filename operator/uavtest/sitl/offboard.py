@@ -53,6 +53,18 @@ def _m(mask: int, bit: int, value: object) -> float:
     return _NAN if mask & bit else float(value)  # type: ignore[arg-type]
 
 
+def _valid(pos: tuple[float, float, float], vel: tuple[float, float, float]) -> bool:
+    """PositionControl::_inputValid: every axis has a position or a velocity, x and y in pairs.
+
+    An invalid setpoint is not refused: MulticopterPositionControl flies its failsafe setpoint
+    instead (zero velocity: "Failsafe: stop and wait", a console warning only).
+    """
+    for i in range(3):
+        if pos[i] != pos[i] and vel[i] != vel[i]:
+            return False
+    return (pos[0] == pos[0]) == (pos[1] == pos[1]) and (vel[0] == vel[0]) == (vel[1] == vel[1])
+
+
 class Offboard:
     """The offboard signal and the last setpoint, for the commander and position control."""
 
@@ -109,6 +121,8 @@ class Offboard:
         if v.commander.nav_state == NavState.OFFBOARD:
             yaw = _m(mask, YAW_IGNORE, self._yaw)
             yawspeed = _m(mask, YAW_RATE_IGNORE, self._yawspeed)
+            if not _valid(pos, vel):  # PX4 flies generateFailsafeSetpoint: stop and wait
+                pos, vel = (_NAN, _NAN, _NAN), (0.0, 0.0, 0.0)
             self.goal = Goal(GoalKind.OFFBOARD, pos[0], pos[1], pos[2], yaw, vel=vel, yawspeed=yawspeed)
 
     def local_ned(self, msg: Msg) -> list[Msg]:

@@ -134,6 +134,15 @@ def test_velocity_setpoint_and_body_frame():
     assert -3.3 < s.v.body.vz < -2.5
 
 
+def test_a_setpoint_with_an_empty_axis_stops_and_waits():
+    """PositionControl::_inputValid fails (z has neither position nor velocity): PX4 stops."""
+    s = airborne_offboard()
+    s.stream(2, vx=3.0, vy=0.0, mask=VEL_ONLY | 32)  # vz ignored too
+    assert math.hypot(s.v.body.vx, s.v.body.vy) < 0.3
+    assert s.v.body.z == pytest.approx(-5.0, abs=0.4)
+    assert s.v.nav_state == NavState.OFFBOARD
+
+
 def test_yaw_setpoint():
     s = airborne_offboard()
     s.stream(6, x=0.0, y=0.0, z=-5.0, yaw=math.pi / 2, mask=POS_ONLY & ~1024)
