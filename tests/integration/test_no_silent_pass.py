@@ -31,8 +31,8 @@ def only_result(tmp_path: Path, name: str) -> dict[str, Any]:
 
 def test_the_issues_offboard_test_is_never_a_pass(tmp_path: Path) -> None:
     """Arm, then offboard, with an obstacle and noCollision + minObstacleDistance: on main this was
-    exit 0, pass, flight time 0.0 s. The built-in simulator refuses offboard: DENIED today (fail,
-    the vehicle's refusal), UNSUPPORTED once it says so (error, fly it with PX4) — never pass."""
+    exit 0, pass, flight time 0.0 s. Armed without a setpoint stream the built-in simulator, like
+    PX4 v1.15, refuses offboard (TEMPORARILY_REJECTED: fail, the vehicle's refusal) — never pass."""
     spec = {
         "replicas": 1,
         "seed": 1,

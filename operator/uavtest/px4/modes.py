@@ -86,6 +86,7 @@ NAV_STATE_OF_MODE: dict[tuple[int, int], NavState] = {
     (MainMode.ACRO, 0): NavState.ACRO,
     (MainMode.ALTCTL, 0): NavState.ALTCTL,
     (MainMode.POSCTL, 0): NavState.POSCTL,
+    (MainMode.OFFBOARD, 0): NavState.OFFBOARD,
     (MainMode.AUTO, AutoSubMode.MISSION): NavState.AUTO_MISSION,
     (MainMode.AUTO, AutoSubMode.LOITER): NavState.AUTO_LOITER,
     (MainMode.AUTO, AutoSubMode.RTL): NavState.AUTO_RTL,

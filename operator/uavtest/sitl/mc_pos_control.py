@@ -48,6 +48,7 @@ class GoalKind(Enum):
     VELOCITY = "velocity"  # position mode sticks: body velocity, climb rate, yaw rate
     ALTITUDE = "altitude"  # altitude mode sticks: tilt, climb rate, yaw rate
     ATTITUDE = "attitude"  # manual/stabilized sticks: tilt, thrust, yaw rate
+    OFFBOARD = "offboard"  # trajectory_setpoint of an offboard client: x, y, z and/or vel, yaw / yawspeed
 
 
 @dataclass(slots=True)
@@ -59,6 +60,8 @@ class Goal:
     yaw: float = math.nan  # nan: face the direction of travel (MPC_YAW_MODE 0), else hold
     speed: float = math.nan  # nan: MPC_XY_CRUISE
     sticks: tuple[float, float, float, float] = (0.0, 0.0, 0.5, 0.0)  # x fwd, y right, z thrust 0..1, r yaw
+    vel: tuple[float, float, float] = (math.nan, math.nan, math.nan)  # offboard velocity (nan: not set)
+    yawspeed: float = math.nan  # offboard yaw rate (nan: not set)
 
 
 @dataclass(frozen=True, slots=True)
@@ -72,6 +75,8 @@ class Limits:
     jerk: float
     z_up: float
     z_down: float
+    z_vel_max_up: float
+    z_vel_max_dn: float
     tko_speed: float
     tko_ramp: float
     land_speed: float
@@ -106,6 +111,8 @@ class Limits:
             jerk=p["MPC_JERK_AUTO"],
             z_up=p["MPC_Z_V_AUTO_UP"],
             z_down=p["MPC_Z_V_AUTO_DN"],
+            z_vel_max_up=p["MPC_Z_VEL_MAX_UP"],
+            z_vel_max_dn=p["MPC_Z_VEL_MAX_DN"],
             tko_speed=p["MPC_TKO_SPEED"],
             tko_ramp=p["MPC_TKO_RAMP_T"],
             land_speed=p["MPC_LAND_SPEED"],
@@ -140,6 +147,7 @@ class Controller:
         self.yaw_rate_scale = yaw_rate_scale
         self.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self.ramp = 0.0  # seconds into the takeoff ramp
+        self.of_ramp = 1e9  # seconds into an offboard takeoff (the vehicle restarts it while landed)
 
     def reset(self, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float) -> None:
         """Restart the reference at the vehicle's state (mode switch, arming)."""
@@ -290,11 +298,59 @@ class Controller:
             target_yaw = goal.yaw
             ax, ay = self._xy_loops(dt, x, y, vx, vy)
             az = self._z_loops(dt, z, vz, False)
+        elif kind is GoalKind.OFFBOARD:
+            return self._offboard(dt, goal, x, y, z, vx, vy, vz, yaw)
         else:
             return self._manual(dt, goal, x, y, z, vx, vy, vz, yaw)
         ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
         az = max(-GRAVITY, min(0.8 * GRAVITY, az))
         return ax, ay, az, self._yaw(dt, yaw, target_yaw)
+
+    def _offboard(
+        self, dt: float, goal: Goal, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float
+    ) -> tuple[float, float, float, float]:
+        """An offboard trajectory_setpoint straight into position control, as PX4 v1.15.
+
+        PX4 runs no flight task in offboard: ``MulticopterPositionControl`` feeds the setpoint to
+        ``PositionControl`` (src/lib/.../PositionControl.cpp ``_positionControl``): the velocity
+        setpoint is the feed-forward velocity plus ``MPC_XY_P`` / ``MPC_Z_P`` times the position
+        error (axes without a position or velocity hold still), limited to ``MPC_XY_VEL_MAX``
+        horizontally and ``MPC_Z_VEL_MAX_UP`` / ``_DN`` vertically (offboard overrides the auto
+        speeds with these); the upward limit ramps up over ``MPC_TKO_RAMP_T`` after a takeoff
+        from the ground (``TakeoffHandling``). The velocity loops and tilt limit then apply as in
+        every mode. No smoothing: PX4 does not apply ``MPC_ACC_HOR`` / jerk in offboard either.
+        """
+        lim = self.lim
+        fx, fy, fz = goal.vel
+        px, py, pz = goal.x, goal.y, goal.z
+        cx = (fx if fx == fx else 0.0) + (lim.xy_p * (px - x) if px == px else 0.0)
+        cy = (fy if fy == fy else 0.0) + (lim.xy_p * (py - y) if py == py else 0.0)
+        cz = (fz if fz == fz else 0.0) + (lim.z_p * (pz - z) if pz == pz else 0.0)
+        v = math.hypot(cx, cy)
+        if v > lim.vel_max:
+            cx, cy = cx * lim.vel_max / v, cy * lim.vel_max / v
+        self.of_ramp += dt
+        up = lim.z_vel_max_up
+        if self.of_ramp < lim.tko_ramp:
+            up = TKO_RAMP_START * -1.0 + (up + TKO_RAMP_START) * self.of_ramp / max(lim.tko_ramp, 1e-3)
+        cz = max(-up, min(lim.z_vel_max_dn, cz))
+        # logged as trajectory_setpoint: the client's position, the limited velocity setpoint
+        self.px, self.py, self.pz = px, py, pz
+        self.vx, self.vy, self.vz = cx, cy, cz
+        self.ax = self.ay = 0.0
+        self.stretch = 1.0
+        evx, evy = cx - vx, cy - vy
+        self.ix = max(-3.0, min(3.0, self.ix + lim.vxy_i * evx * dt))
+        self.iy = max(-3.0, min(3.0, self.iy + lim.vxy_i * evy * dt))
+        ax, ay = self._limit_tilt(lim.vxy_p * evx + self.ix, lim.vxy_p * evy + self.iy, lim.tilt_max)
+        az = self._z_loops(dt, z, vz, False)
+        if goal.yawspeed == goal.yawspeed and goal.yaw != goal.yaw:
+            self.yaw_sp = yaw
+            self.yawrate_sp = goal.yawspeed
+            yr = goal.yawspeed
+        else:
+            yr = self._yaw(dt, yaw, goal.yaw)
+        return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
 
     def _manual(
         self, dt: float, goal: Goal, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float

@@ -31,6 +31,7 @@ __all__ = [
     "HomePosition",
     "ManualControlSetpoint",
     "MissionResult",
+    "OffboardControlMode",
     "PositionSetpoint",
     "PositionSetpointTriplet",
     "TrajectorySetpoint",
@@ -350,6 +351,21 @@ class TrajectorySetpoint:
     acceleration: tuple[float, float, float] = ulog("float[3]")
     yaw: float = ulog("float")
     yawspeed: float = ulog("float")
+
+
+@topic("offboard_control_mode")
+@dataclass(slots=True)
+class OffboardControlMode:
+    """PX4 msg/OffboardControlMode.msg: which setpoint fields an offboard client controls."""
+
+    timestamp: int = ulog("uint64_t")
+    position: bool = ulog("bool")
+    velocity: bool = ulog("bool")
+    acceleration: bool = ulog("bool")
+    attitude: bool = ulog("bool")
+    body_rate: bool = ulog("bool")
+    thrust_and_torque: bool = ulog("bool")
+    direct_actuator: bool = ulog("bool")
 
 
 #: topics subscribed in every log, in this order (position_setpoint only nests)

@@ -44,6 +44,7 @@ from uavtest.sitl.mavlink_streams import STREAMS, SW_VERSION
 from uavtest.sitl.mc_pos_control import IDLE, Controller, Goal, GoalKind, Limits
 from uavtest.sitl.mission import NavItem
 from uavtest.sitl.navigator import EventKind, Navigator, State
+from uavtest.sitl.offboard import Offboard
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
@@ -144,6 +145,7 @@ class Vehicle:
         self._out: list[Msg | tuple[int, Msg]] = []  # type: ignore[assignment]
         self.goal = Goal()
         self.st = State()
+        self.offboard = Offboard(self)
         self.commander = Commander(self)
         self.recorder.start(0, self.params)
         self._estimate()
@@ -333,6 +335,9 @@ class Vehicle:
         "SET_MODE": _on_set_mode,
         "TIMESYNC": _on_timesync,
         "MISSION_SET_CURRENT": _on_mission_set_current,
+        "SET_POSITION_TARGET_LOCAL_NED": lambda self, msg: self.offboard.local_ned(msg),
+        "SET_POSITION_TARGET_GLOBAL_INT": lambda self, msg: self.offboard.global_int(msg),
+        "SET_ATTITUDE_TARGET": lambda self, msg: self.offboard.attitude_target(msg),
     }
 
     # ------------------------------------------------------------------ estimate
@@ -399,8 +404,14 @@ class Vehicle:
             return Goal(GoalKind.IDLE)
         landed = self.land.landed
         if t - c.armed_at_us < self.params["COM_SPOOLUP_TIME"] * 1e6 and landed:
+            self.ctrl.of_ramp = 0.0
             return Goal(GoalKind.IDLE)
         ns = c.nav_state
+        if ns == NavState.OFFBOARD:
+            if landed and not self.offboard.want_takeoff(self.st.z):
+                self.ctrl.of_ramp = 0.0  # PX4's takeoff ramp restarts from the ground
+                return Goal(GoalKind.IDLE)
+            return self.offboard.goal
         if ns in MANUAL_NAV_STATES:
             kind = _MANUAL_GOAL.get(ns, GoalKind.ATTITUDE)
             if landed and c.sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2 and kind != GoalKind.ATTITUDE:

@@ -149,7 +149,9 @@ def params_and_commands() -> tuple[str, str]:
     s.command(183, 1, 1500)  # DO_SET_SERVO: unsupported
     s.command(MavCmd.DO_SET_MODE, 0, 4, 4)  # no custom flag: denied
     s.command(MavCmd.DO_SET_MODE, 1, 4, 4)  # no mission: rejected
-    s.command(MavCmd.DO_SET_MODE, 1, 6, 0)  # offboard: denied
+    s.command(MavCmd.DO_SET_MODE, 1, 6, 0)  # offboard while disarmed: accepted (PX4 v1.15)
+    s.command(MavCmd.COMPONENT_ARM_DISARM, 1)  # in offboard without setpoints: denied
+    s.command(MavCmd.DO_SET_MODE, 1, 4, 3)  # back to hold
     s.command(MavCmd.COMPONENT_ARM_DISARM, 1)
     s.fly(2)
     s.command(MavCmd.COMPONENT_ARM_DISARM, 0)  # still landed: accepted
@@ -187,24 +189,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "7852a3f65247e56351d6b54a904133e0a65a78b9ec99ca687efce6a7f9279cad",
+        "5ecb401923aa8aa43e75087136b47ce354885050dd5d7dc5a2bfd1ddb7ea61d8",
         "8df34c6eb356ce263b00bbc61a95f4821c4d259a382709b2fc01049095b68e98",
     ),
     "manual_and_rtl": (
-        "ac18e3eb17a464e5d93a6d2ec54f7513c0714be7b43ed845412b2a5f10959edc",
+        "e36c8486a6f8e6352d15261214ecafef2cd8fbc717d0da39d286a385095ae83b",
         "8ddefffa531b7b54432b505da8da8b31e57139b9e81c8ae26ee49ed3841284bd",
     ),
     "datalink_loss": (
-        "d0e8bc1ebd17bc14075b6be270092365c8a41873a1c1bd4ff18b0bb1ebfa878b",
+        "bd9139ecafe42463edd4c70c592ea2db873bfaaafe4a51cc94555342b044c694",
         "79521d72b37d5597649b604c9057f584d6799be39a3618dc5ce6cf9e9ed81982",
     ),
     "crash": (
-        "b1cd832f5c3d946a53948e40614c83a5c299cb84f4caa2f1e5278a43ecf7c741",
+        "fd580e2051ac0882d0954667f6353ff715b540419c6488a898c0156713a00396",
         "d95db51d9b8523a9a913fa265d5f790b32164711ecb84bd4c5c945e271beca44",
     ),
     "params_and_commands": (
-        "76649407b617179bbe39e9ed93c2d358e83dfe069e36ec025a89dae58944103c",
-        "3179377babd13c7ed772d66e4d9c586d12cdb471bb18a08b457c8e06d302671c",
+        "21df96c8f817c16db2e6caa1aeb5baca7bb9c13f38e16b39eb90454f16b5d6f5",
+        "af19e0566a6b10b361b336296ecc410da7707901d96c7f501e1332ec6d4bd648",
     ),
 }
 

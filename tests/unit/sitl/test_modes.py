@@ -45,7 +45,7 @@ def test_every_flown_mode_round_trips_through_custom_mode():
 
 
 def test_unknown_modes_are_refused():
-    assert nav_state_from_custom_mode(MainMode.OFFBOARD, 0) is None
+    assert nav_state_from_custom_mode(MainMode.OFFBOARD, 0) == NavState.OFFBOARD
     assert nav_state_from_custom_mode(MainMode.AUTO, AutoSubMode.FOLLOW_TARGET) is None
     assert nav_state_from_custom_mode(42, 0) is None
 

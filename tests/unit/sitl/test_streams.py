@@ -201,7 +201,7 @@ def test_an_unmodelled_command_is_unsupported_and_says_so():
 
 @pytest.mark.parametrize(
     ("main", "sub", "name"),
-    [(4, 8, "AUTO_FOLLOW_TARGET"), (4, 9, "AUTO_PRECLAND"), (6, 0, "OFFBOARD"), (8, 0, "RATTITUDE")],
+    [(4, 8, "AUTO_FOLLOW_TARGET"), (4, 9, "AUTO_PRECLAND"), (8, 0, "RATTITUDE")],
 )
 def test_a_mode_the_simulator_does_not_fly_is_unsupported(main: int, sub: int, name: str):
     v = Vehicle(SimConfig())

@@ -24,6 +24,7 @@ class Reason(IntEnum):
     AUTO_DISARM_LAND = 7
     AUTO_DISARM_PREFLIGHT = 8
     FAILURE_DETECTOR = 11
+    FAILSAFE = 15  # arm_disarm_reason_t::failsafe
 
 
 @dataclass(frozen=True, slots=True)
@@ -38,13 +39,18 @@ class ArmingCheck:
 #: in PX4's order: the first failing check decides
 ARMING_CHECKS: tuple[ArmingCheck, ...] = (
     ArmingCheck(lambda v: not v.ready, MavResult.TEMPORARILY_REJECTED, "Arming denied: system not ready"),
+    # modeCheck.cpp: offboard intended without setpoints → "No offboard signal" blocks arming
+    ArmingCheck(
+        lambda v: v.nav_state == NavState.OFFBOARD and not v.offboard.signal(v.time_us),
+        MavResult.DENIED,
+        "Arming denied: No offboard signal",
+    ),
     ArmingCheck(lambda v: v.crashed, MavResult.DENIED, "Arming denied: vehicle crashed"),
     ArmingCheck(
         lambda v: v.nav_state == NavState.AUTO_MISSION and not v.nav.mission,
         MavResult.DENIED,
         "Arming denied: no valid mission",
     ),
-    ArmingCheck(lambda v: v.nav_state == NavState.OFFBOARD, MavResult.DENIED, None),
 )
 
 

@@ -23,8 +23,11 @@ from uavtest.sitl.commander.failsafe import (
     ACTION_NAV_STATE,
     DATA_LINK_LOST,
     MANUAL_CONTROL_LOST,
+    NAV_STATE_NAME,
+    OFFBOARD_LOSS_NAV_STATE,
     Condition,
     NavAction,
+    OffboardLossAction,
 )
 from uavtest.sitl.land_detector import Transition
 from uavtest.sitl.mav import MavResult, MavSeverity
@@ -52,6 +55,7 @@ FLOWN_NAV_STATES: set[NavState] = {
     NavState.AUTO_RTL,
     NavState.AUTO_TAKEOFF,
     NavState.AUTO_LAND,
+    NavState.OFFBOARD,  # sitl/offboard.py
 }
 
 
@@ -87,6 +91,7 @@ class Commander:
         self._last_gcs_us: int | None = None
         self.sticks = (0.0, 0.0, 0.5, 0.0)
         self._sticks_us: int | None = None
+        self._offboard_lost = False  # the offboard-loss fallback is active
         self.close_log = False  # the log closes after this tick (disarmed)
         self.status_dirty = True  # vehicle_status changed: log it now, not at the next 1 Hz slot
 
@@ -149,6 +154,8 @@ class Commander:
             if self.body.on_ground:
                 self.disarm(t, Reason.FAILURE_DETECTOR, "Disarmed after crash")
             return
+        if self.user_nav_state == NavState.OFFBOARD and self._offboard_loss(t):
+            return
         if land.landed:
             self._auto_disarm(t)
             return
@@ -189,6 +196,49 @@ class Commander:
         ):
             self._sticks_us = None
             self._failsafe(MANUAL_CONTROL_LOST, t)
+
+    def _offboard_loss(self, t: int) -> bool:
+        """PX4 ``Failsafe::checkModeFallback``: offboard intended, signal lost → COM_OBL_RC_ACT.
+
+        A mode fallback (failsafe.cpp ``fromOffboardLossActParam``), not latched: when setpoints
+        come back the vehicle returns to OFFBOARD. Position / altitude / manual need manual
+        control (MANUAL_CONTROL within COM_RC_LOSS_T), else PX4's fallback chain
+        (framework.cpp ``getSelectedAction``) lands on Hold. PX4's STATUSTEXT is
+        ``Failsafe activated`` (framework.cpp ``notifyUser``; the event text follows it).
+        Returns True when the vehicle disarmed or terminated.
+        """
+        signal = self.v.offboard.signal(t)
+        if signal:
+            if self._offboard_lost:
+                self._offboard_lost = False
+                self.failsafe = False
+                self.switch(NavState.OFFBOARD, t)
+            return False
+        if self._offboard_lost:
+            return False
+        self._offboard_lost = True
+        act = int(self.params["COM_OBL_RC_ACT"])
+        self.failsafe = True
+        self.status_dirty = True
+        self.v.text(MavSeverity.CRITICAL, "Failsafe activated")
+        if act == OffboardLossAction.DISARM:
+            self.v.text(MavSeverity.WARNING, "Autopilot disengaged, disarming")
+            self.disarm(t, Reason.FAILSAFE, "Disarmed by failsafe")
+            return True
+        if act == OffboardLossAction.TERMINATE:
+            self.v.text(MavSeverity.CRITICAL, "Failsafe: flight termination")
+            self.body.motors = False
+            self.crashed = True
+            return True
+        target = OFFBOARD_LOSS_NAV_STATE.get(act, NavState.POSCTL)
+        if target in MANUAL_NAV_STATES and not (
+            self._sticks_us is not None
+            and t - self._sticks_us <= max(self.params["COM_RC_LOSS_T"], 0.1) * 1e6
+        ):
+            target = NavState.AUTO_LOITER  # no manual control: PX4's fallback chain ends in Hold
+        self.v.text(MavSeverity.WARNING, f"Autopilot disengaged, switching to {NAV_STATE_NAME[target]}")
+        self.switch(target, t)
+        return False
 
     def _failsafe(self, condition: Condition, t: int) -> None:
         """Report the condition, then take the action its parameter chooses (``ACTION_NAV_STATE``)."""
@@ -265,8 +315,13 @@ class Commander:
         self.v.text(MavSeverity.CRITICAL, f"crash: collided with obstacle {index}")
 
     def set_mode(self, ns: NavState | None) -> MavResult:
-        if ns is None or ns == NavState.OFFBOARD:
+        if ns is None:
             return MavResult.DENIED
+        if ns == NavState.OFFBOARD and self.armed and not self.v.offboard.signal(self.v.time_us):
+            # UserModeIntention::change: armed, mode cannot run (no offboard signal) →
+            # Commander.cpp DO_SET_MODE: TEMPORARILY_REJECTED, printRejectMode's text
+            self.v.text(MavSeverity.CRITICAL, "Switching to Offboard is currently not available")
+            return MavResult.TEMPORARILY_REJECTED
         if self.crashed:
             return MavResult.DENIED
         if ns == NavState.AUTO_MISSION and not self.nav.mission:
@@ -274,6 +329,7 @@ class Commander:
             return MavResult.TEMPORARILY_REJECTED
         self.user_nav_state = ns
         self.failsafe = False
+        self._offboard_lost = False
         self.switch(ns, self.v.time_us)
         return MavResult.ACCEPTED
 
@@ -287,6 +343,8 @@ class Commander:
         self.nav_state = ns
         self.nav_state_us = t
         self.nav.enter(ns, self.st, t / 1e6, target_alt=target_alt, hold_z=hold_z)
+        if ns == NavState.OFFBOARD:
+            self.v.offboard.enter()
         b, e, st = self.body, self.est, self.st
         self.ctrl.reset(st.x, st.y, st.z, b.vx + e.evx, b.vy + e.evy, b.vz + e.evz, st.yaw)
         self.status_dirty = True

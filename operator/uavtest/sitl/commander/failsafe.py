@@ -11,7 +11,16 @@ from enum import IntEnum
 
 from uavtest.px4.modes import NavState
 
-__all__ = ["ACTION_NAV_STATE", "DATA_LINK_LOST", "MANUAL_CONTROL_LOST", "Condition", "NavAction"]
+__all__ = [
+    "ACTION_NAV_STATE",
+    "DATA_LINK_LOST",
+    "MANUAL_CONTROL_LOST",
+    "NAV_STATE_NAME",
+    "OFFBOARD_LOSS_NAV_STATE",
+    "Condition",
+    "NavAction",
+    "OffboardLossAction",
+]
 
 
 class NavAction(IntEnum):
@@ -42,3 +51,37 @@ class Condition:
 
 DATA_LINK_LOST = Condition("NAV_DLL_ACT", "Connection to ground station lost")
 MANUAL_CONTROL_LOST = Condition("NAV_RCL_ACT", "Manual control lost")
+
+
+class OffboardLossAction(IntEnum):
+    """COM_OBL_RC_ACT values (failsafe.cpp ``fromOffboardLossActParam``)."""
+
+    POSITION = 0
+    ALTITUDE = 1
+    MANUAL = 2
+    RETURN = 3
+    LAND = 4
+    HOLD = 5
+    TERMINATE = 6
+    DISARM = 7
+
+
+#: COM_OBL_RC_ACT → the nav state of the fallback (terminate / disarm are not nav states)
+OFFBOARD_LOSS_NAV_STATE: dict[int, NavState] = {
+    OffboardLossAction.POSITION: NavState.POSCTL,
+    OffboardLossAction.ALTITUDE: NavState.ALTCTL,
+    OffboardLossAction.MANUAL: NavState.STAB,
+    OffboardLossAction.RETURN: NavState.AUTO_RTL,
+    OffboardLossAction.LAND: NavState.AUTO_LAND,
+    OffboardLossAction.HOLD: NavState.AUTO_LOITER,
+}
+
+#: failsafe_action_t names PX4's events use ("switching to Hold")
+NAV_STATE_NAME: dict[NavState, str] = {
+    NavState.POSCTL: "Position",
+    NavState.ALTCTL: "Altitude",
+    NavState.STAB: "Stabilized",
+    NavState.AUTO_RTL: "Return",
+    NavState.AUTO_LAND: "Land",
+    NavState.AUTO_LOITER: "Hold",
+}
