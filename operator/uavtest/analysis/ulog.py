@@ -5,7 +5,9 @@
 that it is relative to PX4's home position, and cut to the flight:
 
 1. ``vehicle_land_detected``: from the first takeoff (``landed`` 1 → 0, or the start of the log
-   when it begins in the air) to the last landing after it (0 → 1), or the end of the log;
+   when it begins in the air) to the last landing after it (0 → 1), or the end of the log,
+   provided the vehicle climbed more than ``CLIMB_THRESHOLD`` in between (PX4's land detector
+   lets go during the takeoff ramp: a takeoff cut short on the ground is no flight);
 2. without that topic, arming (``vehicle_status.arming_state`` == ARMED, else
    ``actuator_armed.armed``): from arming to disarming, provided the vehicle climbed in between;
 3. without either, the motion itself: from the ground point before the first climb of more than
@@ -144,8 +146,11 @@ def flight_window(ulog: ULog, *, source: str = "ULog") -> FlightWindow:
 
     land = topic(ulog, "vehicle_land_detected")
     if land is not None and "landed" in land:
-        start, end = _intervals(land["timestamp"] / 1e6, land["landed"] == 0)
-        if start is None:
+        t_land = land["timestamp"] / 1e6
+        start, end = _intervals(t_land, land["landed"] == 0)
+        began_in_air = start is not None and start <= float(t_land[0])
+        if start is None or not (began_in_air or _climbed(lp, start, end)):
+            # a land detector that let go on the ground (thrust ramp, then a land or disarm) is no flight
             return FlightWindow(None, None, False, "vehicle_land_detected")
         return FlightWindow(
             start, end if end is not None else t_end, end is not None, "vehicle_land_detected"

@@ -144,3 +144,37 @@ def test_missing_and_unreadable_files(tmp_path: Path) -> None:
     junk.write_bytes(b"this is not a ULog at all" * 10)
     with pytest.raises(BadInput, match=r"junk\.ulg"):
         read_ulog(junk)
+
+
+def test_a_land_detector_that_let_go_on_the_ground_is_no_flight(tmp_path: Path) -> None:
+    """PX4's land detector says "not landed" during the takeoff ramp: a takeoff cut short on the
+    ground (a land or disarm 0.5 s later, seen on PX4 SITL) must not count as a flight."""
+    from uavtest.analysis.ulog import flight_window
+    from uavtest.sitl.ulog_writer import ULogEncoder
+    from uavtest.sitl.uorb import FORMATS
+
+    def record(topic: str, **values: float) -> list[float]:
+        names = [f.split(" ")[1] for f in FORMATS[topic]]
+        return [values.get(n, 0) for n in names]
+
+    def log(z_peak: float) -> ULog:
+        enc = ULogEncoder(FORMATS)
+        data = bytearray(
+            enc.header(0, {"sys_name": "PX4"}, [], ["vehicle_local_position", "vehicle_land_detected"])
+        )
+        for k in range(100):  # 10 s at 10 Hz; "in the air" from 4 s to 6.6 s
+            t = k * 100_000
+            air = 4_000_000 <= t < 6_600_000
+            z = -z_peak if 4_500_000 <= t < 6_000_000 else 0.0
+            data += enc.data("vehicle_local_position", record("vehicle_local_position", timestamp=t, z=z))
+            data += enc.data(
+                "vehicle_land_detected", record("vehicle_land_detected", timestamp=t, landed=not air)
+            )
+        path = tmp_path / f"hop-{z_peak}.ulg"
+        path.write_bytes(bytes(data))
+        return ULog(str(path))
+
+    hop = flight_window(log(0.003))
+    assert not hop.took_off and hop.source == "vehicle_land_detected"
+    flight = flight_window(log(2.0))
+    assert flight.took_off and flight.start == pytest.approx(4.0) and flight.end == pytest.approx(6.6)
