@@ -116,7 +116,7 @@ def analyse(
         )
         return Analysis(result, trajectory)
 
-    warnings = simulator_warnings(spec)
+    warnings = simulator_warnings(spec) + report.delays
     for w in warnings:
         log.warning("%s", w)
 

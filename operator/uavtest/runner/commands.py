@@ -112,6 +112,11 @@ log = logging.getLogger(__name__)
 SETPOINT_PERIOD_MS = 50
 #: ``mode offboard`` waits until setpoints have streamed this long (PX4 wants them before the switch)
 OFFBOARD_WARMUP_MS = 500
+LATE_MS = 1000  # a command that runs later than this after its time shifts the rest of the schedule
+SCHEDULE_SHIFTED = (
+    "the command schedule was shifted: a command ran more than 1 s late because the vehicle was not "
+    "ready for it (PX4 SITL answers ~35 s after boot); later commands kept their spacing"
+)
 #: COMMAND_INT x / y meaning "not given" (PX4 turns it into NaN: the current position)
 INT32_MAX = 2**31 - 1
 
@@ -328,6 +333,10 @@ def fault_command(fault: Fault) -> CommandLong:
     return CommandLong(Cmd.INJECT_FAILURE, (float(unit), float(kind), float(fault.instance), 0, 0, 0, 0))
 
 
+def _label(command: Command | Fault) -> str:
+    return fault_label(command) if isinstance(command, Fault) else command.action.value
+
+
 def fault_label(fault: Fault) -> str:
     instance = f" #{fault.instance}" if fault.instance else ""
     return f"fault {fault.unit.value}{instance} {fault.type.value}"
@@ -443,6 +452,9 @@ class CommandScheduler:
         self._status_seen = False  # the vehicle reports its pre-arm state (SYS_STATUS)
         self._ready_since_ms: int | None = None  # vehicle time it became ready to arm (None: not ready)
         self._waiting_since_ms: int | None = None  # an arm waits for the vehicle to settle, since then
+        self.shift_ms = 0.0  # how far the schedule moved because a command ran late (``_take_next``)
+        self.delays: list[str] = []  # a note per shift, with its times (the runner's log)
+        self.warnings: list[str] = []  # the same, worded once for the result and the run's summary
 
     @property
     def idle(self) -> bool:
@@ -452,7 +464,34 @@ class CommandScheduler:
     @property
     def next_at_ms(self) -> float:
         """Vehicle time of the next command not yet due (inf when none)."""
-        return self._pending[0].at * 1000.0 if self._pending else math.inf
+        return self._due_ms(self._pending[0]) if self._pending else math.inf
+
+    def _due_ms(self, command: Command | Fault) -> float:
+        """When ``command`` is due: its ``at`` on the vehicle clock, plus the schedule's shift."""
+        return command.at * 1000.0 + self.shift_ms
+
+    def _take_next(self, now_ms: int) -> None:
+        """Start the next command; one that runs more than ``LATE_MS`` late shifts the rest.
+
+        A command runs late when the vehicle was not ready for it: PX4 SITL answers only ~35 s
+        after boot and the runner then waits for its estimator to settle before arming, so a
+        schedule written from boot would otherwise fire all at once. The later commands keep
+        their spacing from this one; each shift is noted (``delays``) and reported.
+        """
+        command = self._pending.popleft()
+        late = now_ms - self._due_ms(command)
+        if late > LATE_MS:
+            self.shift_ms += late
+            note = (
+                f"commands from t={command.at:g} s on run {self.shift_ms / 1000:.1f} s late: the vehicle "
+                f"was not ready for them ({_label(command)} ran at t={now_ms / 1000:.1f} s); "
+                "later commands keep their spacing"
+            )
+            log.warning("%s", note)
+            self.delays.append(note)
+            if SCHEDULE_SHIFTED not in self.warnings:
+                self.warnings.append(SCHEDULE_SHIFTED)
+        self._steps.extend(expand(command, self.home))
 
     @property
     def busy(self) -> bool:
@@ -502,11 +541,14 @@ class CommandScheduler:
         if self.error:
             return []
         out: list[Outgoing] = []
-        while self._pending and self._pending[0].at * 1000.0 <= now_ms:
-            self._steps.extend(expand(self._pending.popleft(), self.home))
         if self._current is not None:
             out += self._resend_if_due(now_ms, wall)
-        while self._current is None and self._steps and not self.error:
+        while self._current is None and not self.error:
+            if not self._steps:  # the previous command is done: take the next one that is due
+                if not self._pending or self._due_ms(self._pending[0]) > now_ms:
+                    break
+                self._take_next(now_ms)
+                continue
             if self._warming_up(self._steps[0], now_ms):
                 break
             out += self._start(self._steps.popleft(), now_ms, wall, armed=armed)

@@ -123,6 +123,7 @@ class FlightReport:
     mission_total: int = 0
     mission_reached: set[int] = field(default_factory=set)
     notes: list[str] = field(default_factory=list)
+    delays: list[str] = field(default_factory=list)  # the command schedule shifted (SCHEDULE_SHIFTED)
     status_texts: list[str] = field(default_factory=list)
     status_log: list[tuple[int, int, str]] = field(default_factory=list)  # (vehicle ms, severity, text)
     refusals: list[Refusal] = field(default_factory=list)  # commands the vehicle refused
@@ -480,6 +481,7 @@ class ReplicaCore:
         rep.collision = mon.collision
         rep.geofence_violation = mon.geofence_violation
         rep.notes.extend(self.scheduler.notes)
+        rep.delays = list(self.scheduler.warnings)
         rep.refusals = list(self.scheduler.refusals)
         rep.faults = list(self.scheduler.faults)
 

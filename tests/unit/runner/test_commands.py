@@ -217,3 +217,38 @@ def test_without_an_arm_settle_sys_status_changes_nothing() -> None:
     s = CommandScheduler([cmd(1.0, "arm")])
     s.on_sys_status(False, 0)
     assert s.update(1000, 0.0, armed=False) == [arm_command()]
+
+
+def test_a_schedule_the_vehicle_was_not_ready_for_shifts_and_keeps_its_spacing() -> None:
+    """PX4 SITL answers ~35 s after boot: commands written from boot run late, the rest follows."""
+    from uavtest.runner.commands import SCHEDULE_SHIFTED, CommandScheduler
+
+    cmds = [
+        Command(at=12, action="arm"),
+        Command(at=14, action="mode", mode="takeoff"),
+        Command(at=30, action="mode", mode="land"),
+    ]
+    sched = CommandScheduler(cmds)
+    sent: list[tuple[int, int]] = []
+    for now in range(46_000, 80_000, 100):  # the flight stage starts at 46 s
+        for msg in sched.update(now, now / 1000, armed=now > 46_000):
+            sent.append((now, msg.command))
+        if sched._current is not None:
+            sched.handle_ack(CommandAck(sched._current.command.command, 0), now, now / 1000)
+    times = [t for t, _ in sent]
+    assert times[0] == 46_000, "the first overdue command runs at once"
+    assert times[-1] - times[0] == 18_000, "the land keeps its 18 s after the arm"
+    assert sched.warnings == [SCHEDULE_SHIFTED] and "34.0 s late" in sched.delays[0]
+
+
+def test_a_command_less_than_a_second_late_does_not_shift_the_schedule() -> None:
+    from uavtest.runner.commands import CommandScheduler
+
+    sched = CommandScheduler([Command(at=1, action="arm"), Command(at=3, action="mode", mode="land")])
+    sent = []
+    for now in range(1_500, 5_000, 100):  # the built-in simulator is ready at 1.5 s
+        for _msg in sched.update(now, now / 1000, armed=now > 1_500):
+            sent.append(now)
+        if sched._current is not None:
+            sched.handle_ack(CommandAck(sched._current.command.command, 0), now, now / 1000)
+    assert sent == [1_500, 3_000] and sched.warnings == []
