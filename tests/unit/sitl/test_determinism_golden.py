@@ -187,24 +187,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "7852a3f65247e56351d6b54a904133e0a65a78b9ec99ca687efce6a7f9279cad",
+        "400366e3047270a6994970d4b6b921056d038a776bb8577791df175fdb2429cf",
         "efab30fdb9430e6a57c40b31f18b85a7c4c7f598d13b80b0de9aff6ff0a49373",
     ),
     "manual_and_rtl": (
-        "ac18e3eb17a464e5d93a6d2ec54f7513c0714be7b43ed845412b2a5f10959edc",
+        "163fde9ef1d886f3b765ca644a355e8e0dd026f613d2a54e3cbee720239fafce",
         "dfc0127caac19d4d9b38cd87ee690509676fde0f8065945286e56dcea7a23a17",
     ),
     "datalink_loss": (
-        "d0e8bc1ebd17bc14075b6be270092365c8a41873a1c1bd4ff18b0bb1ebfa878b",
+        "3db197375d362537c7bf2e1cb713fd03cba34d82435d2386ad6d44b40a2c91fd",
         "ff4898f6792fbcd984e2d98f01a426d6b5be6a9ed7dfc5aeed77b88c0382b96b",
     ),
     "crash": (
-        "b1cd832f5c3d946a53948e40614c83a5c299cb84f4caa2f1e5278a43ecf7c741",
+        "db20a07fdd4b61181543bbd5c484bcc83391136fcdb8e81a8c853cf4423b6165",
         "df3f32f73ba5921f4abab5f41022e0698642694272a1148a0969b969280e7215",
     ),
     "params_and_commands": (
-        "18676b70e7bed8ac8f46779bb0d833257c5d8a9643e60f3909407a6f41939ea1",
-        "2870cadfb5f6d1332a92de207f90d1d01c3f69d5b0bf85d484ea5f47d97d632e",
+        "df8a6fd73efbeb5fc10b6806ce8b9e6109f544b6fda5c97716f7e01a0ab45e43",
+        "200992f29d153521cc0736ec9df4188741dcc9b0a4041d22ccb5fc63fe52aeaa",
     ),
 }
 

@@ -40,7 +40,7 @@ ARMING_CHECKS: tuple[ArmingCheck, ...] = (
     ArmingCheck(lambda v: not v.ready, MavResult.TEMPORARILY_REJECTED, "Arming denied: system not ready"),
     ArmingCheck(lambda v: v.crashed, MavResult.DENIED, "Arming denied: vehicle crashed"),
     ArmingCheck(
-        lambda v: v.nav_state == NavState.AUTO_MISSION and not v.nav.mission,
+        lambda v: v.nav_state == NavState.AUTO_MISSION and not v.nav.mission_valid,
         MavResult.DENIED,
         "Arming denied: no valid mission",
     ),
