@@ -309,3 +309,10 @@ def test_rally_destination_rules():
     assert rally_destination([(5.0, 0.0)], (50.0, 0.0), home) is None  # within 10 m of home: ignored
     assert rally_destination([(49.0, 0.0)], (50.0, 0.0), home) == (49.0, 0.0, 0)
     assert rally_destination([(30.0, 0.0)], (16.0, 0.0), home) is None  # 14 m + 2 m threshold vs 16 m
+
+
+def test_geofence_allows_position_for_a_reposition():
+    v = ready(GF_MAX_HOR_DIST=50, GF_ACTION=3)
+    assert v.nav.geofence_allows_position(40, 0, 10) and not v.nav.geofence_allows_position(60, 0, 10)
+    v.params.set("GF_ACTION", 1)  # warning only: PX4 lets a reposition through
+    assert v.nav.geofence_allows_position(60, 0, 10)

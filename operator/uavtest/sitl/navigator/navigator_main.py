@@ -172,6 +172,16 @@ class Navigator:
                     break
         self.mission_feasible = ok
 
+    def geofence_allows_position(self, x: float, y: float, alt: float) -> bool:
+        """Navigator::geofence_allows_position for a local point ``alt`` m above home: PX4 refuses
+        a DO_REPOSITION outside the fence ("Reposition is outside geofence") unless GF_ACTION is
+        0 or 1 (for the reposition / goto handler)."""
+        p = self.params
+        if int(p["GF_ACTION"]) in (0, 1):
+            return True
+        hx, hy, _ = self.home
+        return self.geofence.allows(x, y, alt, (hx, hy, 0.0), p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"])
+
     def geofence_breach_check(self, st: State, t_us: int) -> GeofenceResult | None:
         """Navigator::geofence_breach_check (every 0.2 s): the result, or None when GF_ACTION is 0
         (PX4 does not check then) or nothing is fenced (no limit, no area: nothing to log)."""
