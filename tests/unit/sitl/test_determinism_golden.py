@@ -188,23 +188,23 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
         "400366e3047270a6994970d4b6b921056d038a776bb8577791df175fdb2429cf",
-        "efab30fdb9430e6a57c40b31f18b85a7c4c7f598d13b80b0de9aff6ff0a49373",
+        "8df34c6eb356ce263b00bbc61a95f4821c4d259a382709b2fc01049095b68e98",
     ),
     "manual_and_rtl": (
         "163fde9ef1d886f3b765ca644a355e8e0dd026f613d2a54e3cbee720239fafce",
-        "dfc0127caac19d4d9b38cd87ee690509676fde0f8065945286e56dcea7a23a17",
+        "8ddefffa531b7b54432b505da8da8b31e57139b9e81c8ae26ee49ed3841284bd",
     ),
     "datalink_loss": (
         "3db197375d362537c7bf2e1cb713fd03cba34d82435d2386ad6d44b40a2c91fd",
-        "ff4898f6792fbcd984e2d98f01a426d6b5be6a9ed7dfc5aeed77b88c0382b96b",
+        "79521d72b37d5597649b604c9057f584d6799be39a3618dc5ce6cf9e9ed81982",
     ),
     "crash": (
         "db20a07fdd4b61181543bbd5c484bcc83391136fcdb8e81a8c853cf4423b6165",
-        "df3f32f73ba5921f4abab5f41022e0698642694272a1148a0969b969280e7215",
+        "d95db51d9b8523a9a913fa265d5f790b32164711ecb84bd4c5c945e271beca44",
     ),
     "params_and_commands": (
-        "df8a6fd73efbeb5fc10b6806ce8b9e6109f544b6fda5c97716f7e01a0ab45e43",
-        "200992f29d153521cc0736ec9df4188741dcc9b0a4041d22ccb5fc63fe52aeaa",
+        "a56585aa1c02fa49c5339a147ef5c1a6745b1f9bcd30501843776ee464c673ce",
+        "d451076fd88702a0eb9a690dc854f5133d2f289603c8eb7da87f0a04606070fb",
     ),
 }
 
