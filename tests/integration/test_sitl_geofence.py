@@ -101,6 +101,7 @@ class Vehicle:
         self.pos = (0.0, 0.0, 0.0)
         self.texts: list[str] = []
         self.armed = False
+        self._chunks: dict[int, list[str]] = {}
 
     def close(self) -> None:
         if self.proc.poll() is None:
@@ -151,8 +152,13 @@ class Vehicle:
                 self.armed = bool(msg.base_mode & 128)
             elif kind == "LOCAL_POSITION_NED":
                 self.pos = (msg.x, msg.y, msg.z)
-            elif kind == "STATUSTEXT":
-                self.texts.append(msg.text)
+            elif kind == "STATUSTEXT":  # MAVLink 2 chunks (id != 0) joined, as a GCS shows them
+                if msg.id == 0:
+                    self.texts.append(msg.text)
+                else:
+                    self._chunks.setdefault(msg.id, []).append(msg.text)
+                    if len(msg.text) < 50:
+                        self.texts.append("".join(self._chunks.pop(msg.id)))
             if until(self):
                 return
             if kind == "NAMED_VALUE_INT" and msg.name == "LOCKSTEP":
@@ -170,8 +176,9 @@ class Vehicle:
         self.fly(lambda v: any("Ready" in t for t in v.texts), 10)
         assert self.command(400, 1) == mavlink2.MAV_RESULT_ACCEPTED
         self.command(22, 0, 0, 0, math.nan, math.nan, math.nan, HOME.alt + 10)
-        self.fly(lambda v: v.mode == LOITER and v.pos[2] < -9, 40)
+        self.fly(lambda v: v.mode == LOITER and v.armed and v.pos[2] < -9, 40)
         assert self.command(176, 1, 3, 0) == mavlink2.MAV_RESULT_ACCEPTED  # position mode
+        self.fly(lambda v: v.mode == POSCTL, 5)  # the heartbeat says so (no stale mode)
         self.sticks = (600, 0, 500, 0)  # 6 m/s North
 
 
@@ -197,7 +204,7 @@ def _fence(half: float = 60.0) -> list[tuple[int, float, float, float]]:
 
 
 def said(v: Vehicle, text: str) -> bool:
-    return text[:50] in v.texts
+    return text in v.texts
 
 
 def test_fence_plan_round_trip_and_hold_at_an_exclusion_circle(vehicle):
@@ -259,7 +266,7 @@ def test_max_hor_dist_breach_returns_home(vehicle):
     v = vehicle(GF_ACTION=3, GF_MAX_HOR_DIST=30, RTL_RETURN_ALT=15)
     v.take_off_and_fly_north()
     v.fly(lambda v: v.mode == LOITER)
-    assert said(v, "Geofence violation: exceeding maximum distance to Home")
+    assert said(v, "Geofence violation: exceeding maximum distance to Home"), v.texts
     assert "Failsafe activated: entering Hold for 5 seconds" in v.texts
     v.sticks = (0, 0, 500, 0)
     v.fly(lambda v: v.mode == RTL, 8)

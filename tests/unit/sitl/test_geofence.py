@@ -71,7 +71,7 @@ def texts_of(msgs: list[Msg]) -> list[str]:
 
 
 def said(texts: list[str], text: str) -> int:
-    """How often ``text`` was sent (STATUSTEXT carries 50 characters; the log has the whole line)."""
+    """How often ``text`` was sent (a longer text goes as MAVLink 2 chunks: its first 50 characters)."""
     return texts.count(text[:50])
 
 
