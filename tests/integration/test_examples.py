@@ -56,3 +56,30 @@ def test_cluster_example_is_a_valid_three_replica_test_that_passes(repo_root: Pa
     out = uavtest_run(repo_root / "examples/uavtest.yaml", tmp_path)
     assert out.code == 0, out.stderr[-3000:]
     assert out.summary is not None and out.summary["replicas"] == 3 and out.summary["passed"] == 3
+
+
+def test_geofence_return_comes_back_from_the_fence(repo_root: Path, tmp_path: Path) -> None:
+    """PX4 v1.15: breach of the 50 m GF_MAX_HOR_DIST circle → "Geofence violation", Hold for
+    COM_FAIL_ACT_T (5 s), Return, land at home; the path never leaves the box around the fence."""
+    import csv
+
+    from pyulog import ULog
+
+    out = uavtest_run(repo_root / "examples/geofence-return.yaml", tmp_path, "--replicas", "2")
+    assert out.code == 0, out.stderr[-3000:]
+    assert out.summary is not None and out.summary["passed"] == 2 and out.summary["errors"] == 0
+    for r in out.summary["results"]:
+        assert r["metrics"]["geofence_violation"] == 0.0 and r["metrics"]["mission_completed"] is False
+        assert 14.0 < r["metrics"]["max_altitude"] < 16.5  # RTL_RETURN_ALT 15
+    for replica in sorted(tmp_path.rglob("replica-*")):
+        texts = [m.message for m in ULog(str(replica / "flight.ulg")).logged_messages]
+        breach = texts.index("Geofence violation: exceeding maximum distance to Home")
+        assert texts[breach + 1 : breach + 4] == [
+            "Failsafe activated: entering Hold for 5 seconds",
+            "Failsafe activated",
+            "RTL: start return at 15 m",
+        ]
+        assert texts[-2:] == ["Landing detected", "Disarmed by landing"]
+        rows = list(csv.DictReader((replica / "trajectory.csv").open()))
+        assert 50.0 < max(float(row["x"]) for row in rows) < 60.0  # crossed the fence, then braked
+        assert abs(float(rows[-1]["x"])) < 2.5 and abs(float(rows[-1]["y"])) < 2.5  # home

@@ -15,6 +15,7 @@ from uavtest.sitl.mav import MavCmd, MavFrame, MissionResult
 from uavtest.spec.models import MissionItem, MissionItemKind
 
 __all__ = [
+    "GLOBAL_FRAMES",
     "NAV_COMMANDS",
     "SUPPORTED_COMMANDS",
     "NavItem",
@@ -45,7 +46,7 @@ SUPPORTED_COMMANDS = NAV_COMMANDS | {
     2500,  # VIDEO_START_CAPTURE
     2501,  # VIDEO_STOP_CAPTURE
 }
-_GLOBAL_FRAMES = frozenset(
+GLOBAL_FRAMES = _GLOBAL_FRAMES = frozenset(
     {MavFrame.GLOBAL, MavFrame.GLOBAL_RELATIVE_ALT, MavFrame.GLOBAL_INT, MavFrame.GLOBAL_RELATIVE_ALT_INT}
 )
 _RELATIVE_FRAMES = frozenset({MavFrame.GLOBAL_RELATIVE_ALT, MavFrame.GLOBAL_RELATIVE_ALT_INT})

@@ -33,6 +33,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "COM_RC_LOSS_T": (FLOAT, 0.5),
     "COM_OF_LOSS_T": (FLOAT, 1.0),
     "COM_OBL_RC_ACT": (INT, 0),
+    "COM_FAIL_ACT_T": (FLOAT, 5.0),
     # navigator / mission
     "NAV_ACC_RAD": (FLOAT, 2.0),
     "NAV_MC_ALT_RAD": (FLOAT, 0.8),
@@ -45,6 +46,11 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "RTL_DESCEND_ALT": (FLOAT, 10.0),
     "RTL_LAND_DELAY": (FLOAT, 0.0),
     "RTL_MIN_DIST": (FLOAT, 10.0),
+    "RTL_TYPE": (INT, 0),
+    # geofence
+    "GF_ACTION": (INT, 2),
+    "GF_MAX_HOR_DIST": (FLOAT, 0.0),
+    "GF_MAX_VER_DIST": (FLOAT, 0.0),
     # multicopter position control
     "MPC_YAW_MODE": (INT, 0),
     "MPC_XY_CRUISE": (FLOAT, 5.0),
@@ -95,10 +101,6 @@ UNMODELLED_AT_BOOT: tuple[str, ...] = (
     "NAV_LOITER_RAD",
     "NAV_TRAFF_AVOID",
     "MIS_DIST_1WP",
-    "RTL_TYPE",
-    "GF_ACTION",
-    "GF_MAX_HOR_DIST",
-    "GF_MAX_VER_DIST",
     "MPC_ACC_HOR_MAX",
     "MPC_TILTMAX_LND",
     "MPC_XY_VEL_D_ACC",

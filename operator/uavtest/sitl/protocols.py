@@ -12,7 +12,10 @@ Missions (MISSION_ITEM_INT, mission_type 0): upload MISSION_COUNT → MISSION_RE
 MISSION_ACK; download MISSION_REQUEST_LIST → MISSION_COUNT, MISSION_REQUEST_INT → MISSION_ITEM_INT;
 MISSION_CLEAR_ALL → MISSION_ACK. Refusals: unsupported item commands MAV_MISSION_UNSUPPORTED,
 bad frames MAV_MISSION_UNSUPPORTED_FRAME, an item outside an upload or a request beyond the
-mission MAV_MISSION_INVALID_SEQUENCE, fence/rally plans MAV_MISSION_UNSUPPORTED.
+mission MAV_MISSION_INVALID_SEQUENCE. Fence (mission_type 1) and rally (2) plans travel the same
+way, each stored apart from the mission (PX4 ``mavlink_mission.cpp``): uploading, downloading or
+clearing one leaves the others; MISSION_CLEAR_ALL with MAV_MISSION_TYPE_ALL clears all three;
+every MISSION_REQUEST_INT / MISSION_ACK / MISSION_COUNT carries the plan's mission_type.
 """
 
 from __future__ import annotations
@@ -21,7 +24,13 @@ import math
 from dataclasses import dataclass
 
 from uavtest.sitl.mav import MissionResult, MissionType, Msg, ParamType
-from uavtest.sitl.mission import NavItem, check_item
+from uavtest.sitl.mission import GLOBAL_FRAMES, SUPPORTED_COMMANDS, NavItem, check_item
+from uavtest.sitl.navigator.geofence import (
+    FENCE_COMMANDS,
+    NAV_FENCE_POLYGON_VERTEX_EXCLUSION,
+    NAV_FENCE_POLYGON_VERTEX_INCLUSION,
+    NAV_RALLY_POINT,
+)
 from uavtest.sitl.params import ParamStore, decode_param_value, encode_param_value
 
 __all__ = ["MissionProtocol", "ParamProtocol", "Upload"]
@@ -92,6 +101,7 @@ class Upload:
     items: list[NavItem]
     started_us: int
     partner: tuple[int, int]
+    mission_type: int = MissionType.MISSION
 
 
 def _ack(msg: Msg, result: MissionResult, mission_type: int = 0) -> Msg:
@@ -106,14 +116,19 @@ def _ack(msg: Msg, result: MissionResult, mission_type: int = 0) -> Msg:
     )
 
 
-def _request(msg: Msg, seq: int) -> Msg:
+def _request(msg: Msg, seq: int, mission_type: int = 0) -> Msg:
     return Msg(
         "MISSION_REQUEST_INT",
-        {"target_system": msg.sysid, "target_component": msg.compid, "seq": seq, "mission_type": 0},
+        {
+            "target_system": msg.sysid,
+            "target_component": msg.compid,
+            "seq": seq,
+            "mission_type": mission_type,
+        },
     )
 
 
-def item_message(item: NavItem, msg: Msg, current: int) -> Msg:
+def item_message(item: NavItem, msg: Msg, current: int, mission_type: int = 0) -> Msg:
     return Msg(
         "MISSION_ITEM_INT",
         {
@@ -122,7 +137,7 @@ def item_message(item: NavItem, msg: Msg, current: int) -> Msg:
             "seq": item.seq,
             "frame": item.frame,
             "command": item.command,
-            "current": int(item.seq == current),
+            "current": int(item.seq == current and mission_type == MissionType.MISSION),
             "autocontinue": item.autocontinue,
             "param1": item.param1,
             "param2": item.param2,
@@ -131,18 +146,73 @@ def item_message(item: NavItem, msg: Msg, current: int) -> Msg:
             "x": item.x,
             "y": item.y,
             "z": item.z,
-            "mission_type": 0,
+            "mission_type": mission_type,
         },
     )
 
 
+_PLAN_TYPES = (MissionType.MISSION, MissionType.FENCE, MissionType.RALLY)
+
+
+def check_plan_item(item: NavItem, mission_type: int) -> MissionResult:
+    """ACCEPTED, or PX4's refusal of an item of a fence / rally plan (``mavlink_mission.cpp``
+    parse_mavlink_mission_item + handle_mission_item_both): fence and rally items need a global
+    frame (else MAV_MISSION_UNSUPPORTED_FRAME), a command PX4 parses (else
+    MAV_MISSION_UNSUPPORTED); a polygon vertex with fewer than 3 vertices is MAV_MISSION_ERROR
+    ("Fence: too few vertices"); fence or rally items in a mission are MAV_MISSION_ERROR."""
+    fence_or_rally = item.command in FENCE_COMMANDS or item.command == NAV_RALLY_POINT
+    if mission_type == MissionType.MISSION:
+        return MissionResult.ERROR if fence_or_rally else check_item(item)
+    if not fence_or_rally and item.command not in SUPPORTED_COMMANDS:
+        return MissionResult.UNSUPPORTED
+    if item.frame not in GLOBAL_FRAMES:
+        return MissionResult.UNSUPPORTED_FRAME
+    if not math.isfinite(item.z) or abs(item.x) > 900_000_000 or abs(item.y) > 1_800_000_000:
+        return MissionResult.INVALID
+    if (
+        mission_type == MissionType.FENCE
+        and item.command
+        in (
+            NAV_FENCE_POLYGON_VERTEX_INCLUSION,
+            NAV_FENCE_POLYGON_VERTEX_EXCLUSION,
+        )
+        and int(item.param1 + 0.5) < 3
+    ):
+        return MissionResult.ERROR
+    return MissionResult.ACCEPTED
+
+
 class MissionProtocol:
-    """Mission transfer state; ``installed`` holds a mission the vehicle should take."""
+    """Mission, fence and rally plan transfers (one store per MAV_MISSION_TYPE, as PX4's
+    ``MavlinkMissionManager``); ``installed`` / ``fence_installed`` / ``rally_installed`` hold a
+    plan the vehicle should take (set when an upload or clear of that type completes)."""
 
     def __init__(self) -> None:
         self.items: list[NavItem] = []
+        self.fence: list[NavItem] = []
+        self.rally: list[NavItem] = []
         self.upload: Upload | None = None
-        self.installed: list[NavItem] | None = None  # set when an upload or clear completes
+        self.installed: list[NavItem] | None = None
+        self.fence_installed: list[NavItem] | None = None
+        self.rally_installed: list[NavItem] | None = None
+
+    def _stored(self, mtype: int) -> list[NavItem]:
+        if mtype == MissionType.FENCE:
+            return self.fence
+        if mtype == MissionType.RALLY:
+            return self.rally
+        return self.items
+
+    def _install(self, mtype: int, items: list[NavItem]) -> None:
+        if mtype == MissionType.FENCE:
+            self.fence = items
+            self.fence_installed = list(items)
+        elif mtype == MissionType.RALLY:
+            self.rally = items
+            self.rally_installed = list(items)
+        else:
+            self.items = items
+            self.installed = list(items)
 
     def handle(self, msg: Msg, now_us: int, current: int) -> list[Msg] | None:
         name = msg.name
@@ -160,40 +230,31 @@ class MissionProtocol:
         mtype = int(msg.get("mission_type", 0) or 0)
         if name == "MISSION_ACK":
             return []
-        if mtype != MissionType.MISSION:
-            if name == "MISSION_REQUEST_LIST":
-                return [
-                    Msg(
-                        "MISSION_COUNT",
-                        {
-                            "target_system": msg.sysid,
-                            "target_component": msg.compid,
-                            "count": 0,
-                            "mission_type": mtype,
-                        },
-                    )
-                ]
-            if name == "MISSION_CLEAR_ALL":
-                return [_ack(msg, MissionResult.ACCEPTED, mtype)]
-            return [_ack(msg, MissionResult.UNSUPPORTED, mtype)]
         if name == "MISSION_CLEAR_ALL":
-            self.items = []
+            if mtype == MissionType.ALL:
+                for t in _PLAN_TYPES:
+                    self._install(t, [])
+            elif mtype in _PLAN_TYPES:
+                self._install(mtype, [])
+            else:
+                return [_ack(msg, MissionResult.ERROR, mtype)]
             self.upload = None
-            self.installed = []
-            return [_ack(msg, MissionResult.ACCEPTED)]
+            return [_ack(msg, MissionResult.ACCEPTED, mtype)]
+        if mtype not in _PLAN_TYPES:  # PX4: "Received unknown mission type, abort."
+            return [_ack(msg, MissionResult.ERROR, mtype)]
         if name == "MISSION_COUNT":
             count = int(msg.get("count", 0))
             if count == 0:
-                self.items = []
-                self.installed = []
+                self._install(mtype, [])
                 self.upload = None
-                return [_ack(msg, MissionResult.ACCEPTED)]
+                return [_ack(msg, MissionResult.ACCEPTED, mtype)]
             if count > 2000:
-                return [_ack(msg, MissionResult.NO_SPACE)]
-            self.upload = Upload(count, [], now_us, (msg.sysid, msg.compid))
-            return [_request(msg, 0)]
+                return [_ack(msg, MissionResult.NO_SPACE, mtype)]
+            self.upload = Upload(count, [], now_us, (msg.sysid, msg.compid), mtype)
+            return [_request(msg, 0, mtype)]
         if name in ("MISSION_ITEM_INT", "MISSION_ITEM"):
-            return self._item(msg, now_us)
+            return self._item(msg, now_us, mtype)
+        stored = self._stored(mtype)
         if name == "MISSION_REQUEST_LIST":
             return [
                 Msg(
@@ -201,34 +262,34 @@ class MissionProtocol:
                     {
                         "target_system": msg.sysid,
                         "target_component": msg.compid,
-                        "count": len(self.items),
-                        "mission_type": 0,
+                        "count": len(stored),
+                        "mission_type": mtype,
                     },
                 )
             ]
         # MISSION_REQUEST_INT / MISSION_REQUEST
         seq = int(msg.get("seq", -1))
-        if not 0 <= seq < len(self.items):
-            return [_ack(msg, MissionResult.INVALID_SEQUENCE)]
-        item = item_message(self.items[seq], msg, current)
+        if not 0 <= seq < len(stored):
+            return [_ack(msg, MissionResult.INVALID_SEQUENCE, mtype)]
+        item = item_message(stored[seq], msg, current, mtype)
         if name == "MISSION_REQUEST":
             fields = dict(item.fields)
             fields["x"], fields["y"] = item.fields["x"] / 1e7, item.fields["y"] / 1e7
             return [Msg("MISSION_ITEM", fields)]
         return [item]
 
-    def _item(self, msg: Msg, now_us: int) -> list[Msg]:
+    def _item(self, msg: Msg, now_us: int, mtype: int) -> list[Msg]:
         up = self.upload
         if up is not None and now_us - up.started_us > UPLOAD_TIMEOUT_US and len(up.items) == 0:
             up = None
-        if up is None:
-            return [_ack(msg, MissionResult.INVALID_SEQUENCE)]
+        if up is None or up.mission_type != mtype:
+            return [_ack(msg, MissionResult.INVALID_SEQUENCE, mtype)]
         seq = int(msg.get("seq", -1))
         expected = len(up.items)
         if seq != expected:
             if seq < expected:
                 return []  # a duplicate: the partner resends; ours is still pending
-            return [_request(msg, expected)]
+            return [_request(msg, expected, mtype)]
         x, y = msg.get("x", 0), msg.get("y", 0)
         if msg.name == "MISSION_ITEM":
             x, y = round(float(x) * 1e7), round(float(y) * 1e7)
@@ -245,15 +306,14 @@ class MissionProtocol:
             z=float(msg.get("z", 0.0)),
             autocontinue=int(msg.get("autocontinue", 1)),
         )
-        verdict = check_item(item)
+        verdict = check_plan_item(item, mtype)
         if verdict != MissionResult.ACCEPTED:
             self.upload = None
-            return [_ack(msg, verdict)]
+            return [_ack(msg, verdict, mtype)]
         up.items.append(item)
         up.started_us = now_us
         if len(up.items) < up.count:
-            return [_request(msg, len(up.items))]
-        self.items = up.items
-        self.installed = list(up.items)
+            return [_request(msg, len(up.items), mtype)]
+        self._install(mtype, up.items)
         self.upload = None
-        return [_ack(msg, MissionResult.ACCEPTED)]
+        return [_ack(msg, MissionResult.ACCEPTED, mtype)]

@@ -28,6 +28,7 @@ __all__ = [
     "RECORD",
     "TOPICS",
     "ActuatorArmed",
+    "GeofenceResult",
     "HomePosition",
     "ManualControlSetpoint",
     "MissionResult",
@@ -366,6 +367,18 @@ class OffboardControlMode:
     body_rate: bool = ulog("bool")
     thrust_and_torque: bool = ulog("bool")
     direct_actuator: bool = ulog("bool")
+
+
+@topic("geofence_result")
+@dataclass(slots=True)
+class GeofenceResult:
+    """PX4 msg/GeofenceResult.msg (published by the navigator's geofence_breach_check)."""
+
+    timestamp: int = ulog("uint64_t")
+    geofence_max_dist_triggered: bool = ulog("bool")
+    geofence_max_alt_triggered: bool = ulog("bool")
+    geofence_custom_fence_triggered: bool = ulog("bool")
+    geofence_action: int = ulog("uint8_t")
 
 
 #: topics subscribed in every log, in this order (position_setpoint only nests)

@@ -269,8 +269,23 @@ class Vehicle:
                 self.mission_proto.installed = None
                 self.drain_nav_events()
                 self._log_mission_result()
+            self._install_fence_rally()
             return replies
         return []
+
+    def _install_fence_rally(self) -> None:
+        """A fence or rally plan just uploaded / cleared goes to the navigator (PX4: dataman)."""
+        proto = self.mission_proto
+        if proto.fence_installed is not None:
+            c = self.commander
+            flying = c.armed and not self.land.landed and int(self.params["GF_ACTION"]) != 0
+            self.nav.set_fence(proto.fence_installed, (self.st.x, self.st.y) if flying else None)
+            proto.fence_installed = None
+            self.drain_nav_events()
+            self._log_mission_result()
+        if proto.rally_installed is not None:
+            self.nav.set_rally(proto.rally_installed)
+            proto.rally_installed = None
 
     def landed_state(self) -> LandedState:
         if self.land.landed:
@@ -361,6 +376,10 @@ class Vehicle:
         commander.update(t)
         goal = self._goal_for(t)
         self.goal = goal
+        if self._tick % (CONTROL_EVERY * 10) == 0:  # 5 Hz: GEOFENCE_CHECK_INTERVAL_US
+            result = self.nav.geofence_breach_check(self.st, t)
+            if result is not None:
+                self.recorder.data(result)
         b, e, st = self.body, self.est, self.st
         if commander.armed and not commander.crashed:
             self._cmd = self.ctrl.update(
@@ -459,7 +478,7 @@ class Vehicle:
         self.recorder.data(
             topics.MissionResult(
                 self.time_us, 0, 0, self.commander.home_count, nav.reached, min(nav.current, 65535), total,
-                total > 0, False, nav.finished, False, 0, 0, 0, 0,
+                nav.mission_valid, False, nav.finished, False, 0, 0, 0, 0,
             )
         )  # fmt: skip
 

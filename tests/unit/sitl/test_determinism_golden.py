@@ -189,24 +189,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "5ecb401923aa8aa43e75087136b47ce354885050dd5d7dc5a2bfd1ddb7ea61d8",
+        "131097fc6ff3c722eb1f53f13cb2e112643ea62a4d60b4271f1b12a051af4582",
         "8df34c6eb356ce263b00bbc61a95f4821c4d259a382709b2fc01049095b68e98",
     ),
     "manual_and_rtl": (
-        "e36c8486a6f8e6352d15261214ecafef2cd8fbc717d0da39d286a385095ae83b",
+        "4d6f154445f5e522c1fc29aa1bc72b5821c17001aa4698fe7d80fa95acd6956d",
         "8ddefffa531b7b54432b505da8da8b31e57139b9e81c8ae26ee49ed3841284bd",
     ),
     "datalink_loss": (
-        "bd9139ecafe42463edd4c70c592ea2db873bfaaafe4a51cc94555342b044c694",
+        "8bee8edc059ffb3387fad4530d37bb2ef17218918bf4dd594fabcecd64fcfed8",
         "79521d72b37d5597649b604c9057f584d6799be39a3618dc5ce6cf9e9ed81982",
     ),
     "crash": (
-        "fd580e2051ac0882d0954667f6353ff715b540419c6488a898c0156713a00396",
+        "b3b3c03417b49a78150fc13949fdec31f271a4731bb98cab8f046514285fa77d",
         "d95db51d9b8523a9a913fa265d5f790b32164711ecb84bd4c5c945e271beca44",
     ),
     "params_and_commands": (
-        "21df96c8f817c16db2e6caa1aeb5baca7bb9c13f38e16b39eb90454f16b5d6f5",
-        "af19e0566a6b10b361b336296ecc410da7707901d96c7f501e1332ec6d4bd648",
+        "cacb4b9b14a139708e9b86e7de9b106e0438cdbe9bdf19a573760287791a939c",
+        "4a17aa959370f1049b575d56ff23f38cee5ba7744b5b501f799d32414edecfaf",
     ),
 }
 

@@ -75,7 +75,9 @@ def test_items_out_of_sequence():
     assert again.name == "MISSION_REQUEST_INT" and again.fields["seq"] == 0
 
 
-def test_fence_and_rally_plans_are_unsupported():
+def test_fence_and_rally_plans_are_stored_apart():
     proto = MissionProtocol()
-    (ack,) = proto.handle(Msg("MISSION_COUNT", {"count": 3, "mission_type": 1}, *GCS), 0, 0) or []
-    assert ack.fields["type"] == MissionResult.UNSUPPORTED
+    (req,) = proto.handle(Msg("MISSION_COUNT", {"count": 3, "mission_type": 1}, *GCS), 0, 0) or []
+    assert req.name == "MISSION_REQUEST_INT" and req.fields["mission_type"] == 1
+    (ack,) = proto.handle(Msg("MISSION_COUNT", {"count": 0, "mission_type": 2}, *GCS), 0, 0) or []
+    assert ack.fields["type"] == MissionResult.ACCEPTED and ack.fields["mission_type"] == 2

@@ -47,7 +47,7 @@ ARMING_CHECKS: tuple[ArmingCheck, ...] = (
     ),
     ArmingCheck(lambda v: v.crashed, MavResult.DENIED, "Arming denied: vehicle crashed"),
     ArmingCheck(
-        lambda v: v.nav_state == NavState.AUTO_MISSION and not v.nav.mission,
+        lambda v: v.nav_state == NavState.AUTO_MISSION and not v.nav.mission_valid,
         MavResult.DENIED,
         "Arming denied: no valid mission",
     ),

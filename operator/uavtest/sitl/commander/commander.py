@@ -22,10 +22,14 @@ from uavtest.sitl.commander.arming import Reason, arming_denied
 from uavtest.sitl.commander.failsafe import (
     ACTION_NAV_STATE,
     DATA_LINK_LOST,
+    GEOFENCE_TEXTS,
+    GF_ACTION_NAV_STATE,
+    GF_DELAYED_ACTIONS,
     MANUAL_CONTROL_LOST,
     NAV_STATE_NAME,
     OFFBOARD_LOSS_NAV_STATE,
     Condition,
+    GeofenceAction,
     NavAction,
     OffboardLossAction,
 )
@@ -94,6 +98,8 @@ class Commander:
         self._offboard_lost = False  # the offboard-loss fallback is active
         self.close_log = False  # the log closes after this tick (disarmed)
         self.status_dirty = True  # vehicle_status changed: log it now, not at the next 1 Hz slot
+        self._gf_active = False  # a geofence breach has been acted on (until it clears)
+        self._gf_pending: tuple[NavState, int] | None = None  # GF action after COM_FAIL_ACT_T hold
 
     @property
     def home_count(self) -> int:
@@ -196,6 +202,52 @@ class Commander:
         ):
             self._sticks_us = None
             self._failsafe(MANUAL_CONTROL_LOST, t)
+        self._check_geofence(t)
+
+    def _check_geofence(self, t: int) -> None:
+        """GF_ACTION on a breach the navigator reported (failsafe.cpp checkStateAndMode
+        ``geofence_breached`` with fromGfActParam; texts from geofenceCheck.cpp and
+        framework.cpp notifyUser). Acts once per breach; Return / Land hold COM_FAIL_ACT_T first."""
+        pending = self._gf_pending
+        if pending is not None:
+            if self.nav_state != NavState.AUTO_LOITER:
+                self._gf_pending = None  # the user switched modes during the hold
+            elif t >= pending[1]:
+                self._gf_pending = None
+                self.v.text(MavSeverity.CRITICAL, "Failsafe activated")
+                self.switch(pending[0], t)
+        gf = self.nav.geofence
+        if not (gf.max_dist or gf.max_alt or gf.custom):
+            self._gf_active = False
+            return
+        action = int(self.params["GF_ACTION"])
+        if self._gf_active or action == GeofenceAction.NONE:
+            return
+        self._gf_active = True
+        for flag, text in GEOFENCE_TEXTS:
+            if getattr(gf, flag):
+                self.v.text(MavSeverity.CRITICAL, text)
+        if action == GeofenceAction.TERMINATE:
+            self.failsafe = True
+            self.v.text(MavSeverity.CRITICAL, "Failsafe activated")
+            self.body.motors = False
+            self.crashed = True
+            return
+        target = GF_ACTION_NAV_STATE.get(action)
+        if target is None:  # Warn (and values PX4 maps to Warn)
+            self.v.text(MavSeverity.CRITICAL, "Failsafe activated")
+            return
+        self.failsafe = True
+        delay = self.params["COM_FAIL_ACT_T"]
+        if action in GF_DELAYED_ACTIONS and delay > 0.1:
+            self.v.text(
+                MavSeverity.CRITICAL, f"Failsafe activated: entering Hold for {int(delay + 0.5)} seconds"
+            )
+            self.switch(NavState.AUTO_LOITER, t)
+            self._gf_pending = (target, t + round(delay * 1e6))
+        else:
+            self.v.text(MavSeverity.CRITICAL, "Failsafe activated")
+            self.switch(target, t)
 
     def _offboard_loss(self, t: int) -> bool:
         """PX4 ``Failsafe::checkModeFallback``: offboard intended, signal lost → COM_OBL_RC_ACT.
@@ -261,6 +313,7 @@ class Commander:
         lat, lon = self.proj.reproject(st.x, st.y)
         self.home = (st.x, st.y, st.z, lat, lon, self.home_alt - st.z, st.yaw)
         self.nav.home = (st.x, st.y, st.z)
+        self.nav.check_mission_feasible()  # PX4 rechecks the mission when home changes
         self.home_set = True
         self._home_count += 1
         self.recorder.data(
@@ -285,6 +338,11 @@ class Commander:
         self.armed_at_us = t
         self.arming_reason = reason
         self.failsafe = False
+        self._gf_active = False
+        self._gf_pending = None
+        rtl_type = int(self.params["RTL_TYPE"])
+        if rtl_type != 0:
+            self.v.text(MavSeverity.WARNING, f"RTL_TYPE {rtl_type} not modelled: Return flies RTL_TYPE 0")
         self.set_home(t)
         if self.nav_state == NavState.AUTO_MISSION and self.nav.finished:
             self.nav.set_current(0)
@@ -324,7 +382,7 @@ class Commander:
             return MavResult.TEMPORARILY_REJECTED
         if self.crashed:
             return MavResult.DENIED
-        if ns == NavState.AUTO_MISSION and not self.nav.mission:
+        if ns == NavState.AUTO_MISSION and not self.nav.mission_valid:
             self.v.text(MavSeverity.CRITICAL, "Mode not available: no valid mission")
             return MavResult.TEMPORARILY_REJECTED
         self.user_nav_state = ns

@@ -14,10 +14,14 @@ from uavtest.px4.modes import NavState
 __all__ = [
     "ACTION_NAV_STATE",
     "DATA_LINK_LOST",
+    "GEOFENCE_TEXTS",
+    "GF_ACTION_NAV_STATE",
+    "GF_DELAYED_ACTIONS",
     "MANUAL_CONTROL_LOST",
     "NAV_STATE_NAME",
     "OFFBOARD_LOSS_NAV_STATE",
     "Condition",
+    "GeofenceAction",
     "NavAction",
     "OffboardLossAction",
 ]
@@ -85,3 +89,32 @@ NAV_STATE_NAME: dict[NavState, str] = {
     NavState.AUTO_LAND: "Land",
     NavState.AUTO_LOITER: "Hold",
 }
+
+
+class GeofenceAction(IntEnum):
+    """GF_ACTION values (msg/GeofenceResult.msg GF_ACTION_*)."""
+
+    NONE = 0
+    WARN = 1
+    LOITER = 2
+    RTL = 3
+    TERMINATE = 4
+    LAND = 5
+
+
+#: GF_ACTION → the nav state (failsafe.cpp Failsafe::fromGfActParam: Hold_mode, Return_mode, Land_mode)
+GF_ACTION_NAV_STATE: dict[int, NavState] = {
+    GeofenceAction.LOITER: NavState.AUTO_LOITER,
+    GeofenceAction.RTL: NavState.AUTO_RTL,
+    GeofenceAction.LAND: NavState.AUTO_LAND,
+}
+#: actions whose user takeover is ``Auto`` in fromGfActParam: with COM_FAIL_ACT_T > 0.1 s the
+#: framework (failsafe/framework.cpp) holds that long first ("entering Hold for N seconds");
+#: Hold is AlwaysModeSwitchOnly and Terminate Never, so they act at once
+GF_DELAYED_ACTIONS = frozenset({GeofenceAction.RTL, GeofenceAction.LAND})
+#: geofence_result flag → the critical text PX4 sends (HealthAndArmingChecks/checks/geofenceCheck.cpp)
+GEOFENCE_TEXTS = (
+    ("max_dist", "Geofence violation: exceeding maximum distance to Home"),
+    ("max_alt", "Geofence violation: exceeding maximum altitude above Home"),
+    ("custom", "Geofence violation: approaching or outside geofence"),
+)

@@ -12,7 +12,14 @@ queues events (mission item reached, mission finished, status texts). PX4 behavi
   reports it), then descends; the mission is finished once landed;
 - DO_CHANGE_SPEED sets the cruise speed; camera items are skipped;
 - return: climb to ``RTL_RETURN_ALT`` (unless within ``RTL_MIN_DIST``), fly home, descend to
-  ``RTL_DESCEND_ALT``, wait ``RTL_LAND_DELAY`` (negative: forever), land.
+  ``RTL_DESCEND_ALT``, wait ``RTL_LAND_DELAY`` (negative: forever), land;
+- return destination (``RTL_TYPE`` 0, ``rtl.cpp`` findRtlDestination): home or the closest rally
+  point (``geofence.rally_destination``); RTL_TYPE 1-3 are not modelled (said at arming) and
+  fly as 0;
+- geofence (``geofence.py``): the breach check every 0.2 s (``geofence_breach_check``) and the
+  mission feasibility check against it (``mission_feasibility_checker.cpp``
+  checkMissionAgainstGeofence: a waypoint outside → "Geofence violation for waypoint N", the
+  mission is not valid), rerun when the mission, the fence or home change, as PX4 does.
 """
 
 from __future__ import annotations
@@ -27,7 +34,9 @@ from uavtest.sitl.geo import Projection
 from uavtest.sitl.mav import MavCmd, MavSeverity
 from uavtest.sitl.mc_pos_control import Goal, GoalKind, wrap_pi
 from uavtest.sitl.mission import NavItem, has_position
+from uavtest.sitl.navigator.geofence import NAV_RALLY_POINT, Geofence, rally_destination
 from uavtest.sitl.params import ParamStore
+from uavtest.sitl.uorb import GeofenceResult
 
 __all__ = ["Event", "EventKind", "Navigator", "State"]
 
@@ -76,6 +85,8 @@ class _Rtl:
     phase: str = "climb"
     alt: float = 0.0
     since: float = 0.0
+    x: float = 0.0  # destination: home or a rally point
+    y: float = 0.0
 
 
 @dataclass(slots=True)
@@ -110,6 +121,14 @@ class Navigator:
         self.home = (0.0, 0.0, 0.0)
         self._step = _Step()
         self._goal = Goal()
+        self.geofence = Geofence(projection)
+        self.rally: list[tuple[float, float]] = []  # rally points, local x, y
+        self.mission_feasible = True  # the mission passes the geofence
+
+    @property
+    def mission_valid(self) -> bool:
+        """mission_result.valid: a mission is loaded and passes the feasibility check."""
+        return bool(self.mission) and self.mission_feasible
 
     # ------------------------------------------------------------------ configuration
 
@@ -120,6 +139,62 @@ class Navigator:
         self.finished = False
         self._step = _Step()
         self.events.append(Event(EventKind.CURRENT, 0))
+        self.check_mission_feasible()
+
+    def set_fence(self, items: list[NavItem], flying_at: tuple[float, float] | None) -> None:
+        """Take a fence plan (``flying_at``: the vehicle's x, y when airborne with GF_ACTION set)."""
+        hx, hy, _ = self.home
+        here = None if flying_at is None else self.proj.reproject(*flying_at)
+        for text in self.geofence.set_areas(items, self.proj.reproject(hx, hy), here):
+            self.events.append(Event(EventKind.TEXT, (MavSeverity.CRITICAL, text)))
+        self.check_mission_feasible()
+
+    def set_rally(self, items: list[NavItem]) -> None:
+        self.rally = [self.proj.project(it.lat, it.lon) for it in items if it.command == NAV_RALLY_POINT]
+
+    def check_mission_feasible(self) -> None:
+        """MissionFeasibilityChecker::checkMissionAgainstGeofence: every waypoint inside the fence."""
+        p = self.params
+        gf = self.geofence
+        max_hor, max_ver = p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"]
+        ok = True
+        if self.mission and (max_hor > 0 or max_ver > 0 or gf.areas):
+            hx, hy, hz = self.home
+            home_amsl = self.home_alt - hz
+            for i, item in enumerate(self.mission):
+                if not has_position(item):
+                    continue
+                x, y = self.proj.project(item.lat, item.lon)
+                if not gf.allows(x, y, item.alt_rel(home_amsl), (hx, hy, 0.0), max_hor, max_ver):
+                    ok = False
+                    text = f"Geofence violation for waypoint {i + 1}"
+                    self.events.append(Event(EventKind.TEXT, (MavSeverity.CRITICAL, text)))
+                    break
+        self.mission_feasible = ok
+
+    def geofence_allows_position(self, x: float, y: float, alt: float) -> bool:
+        """Navigator::geofence_allows_position for a local point ``alt`` m above home: PX4 refuses
+        a DO_REPOSITION outside the fence ("Reposition is outside geofence") unless GF_ACTION is
+        0 or 1 (for the reposition / goto handler)."""
+        p = self.params
+        if int(p["GF_ACTION"]) in (0, 1):
+            return True
+        hx, hy, _ = self.home
+        return self.geofence.allows(x, y, alt, (hx, hy, 0.0), p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"])
+
+    def geofence_breach_check(self, st: State, t_us: int) -> GeofenceResult | None:
+        """Navigator::geofence_breach_check (every 0.2 s): the result, or None when GF_ACTION is 0
+        (PX4 does not check then) or nothing is fenced (no limit, no area: nothing to log)."""
+        p = self.params
+        gf = self.geofence
+        action = int(p["GF_ACTION"])
+        max_hor, max_ver = p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"]
+        if action == 0 or (max_hor <= 0 and max_ver <= 0 and not gf.areas):
+            gf.max_dist = gf.max_alt = gf.custom = False
+            return None
+        hx, hy, hz = self.home
+        gf.check(st.x, st.y, -st.z, (hx, hy, -hz), max_hor, max_ver)
+        return GeofenceResult(t_us, gf.max_dist, gf.max_alt, gf.custom, action)
 
     def set_current(self, seq: int) -> None:
         self.current = max(0, min(seq, max(len(self.mission) - 1, 0)))
@@ -346,14 +421,18 @@ class Navigator:
     def _rtl_start(self, st: State, now: float) -> _Rtl:
         p = self.params
         hx, hy, _ = self.home
+        if self.rally:  # RTL_TYPE 0: the closest of home and the rally points
+            dest = rally_destination(self.rally, (st.x, st.y), (hx, hy))
+            if dest is not None:
+                hx, hy = dest[0], dest[1]
         far = math.hypot(st.x - hx, st.y - hy) > p["RTL_MIN_DIST"]
         alt = max(-st.z, p["RTL_RETURN_ALT"]) if far else -st.z
         self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, f"RTL: start return at {round(alt)} m")))
-        return _Rtl(phase="climb", alt=alt, since=now)
+        return _Rtl(phase="climb", alt=alt, since=now, x=hx, y=hy)
 
     def _rtl(self, r: _Rtl, st: State, now: float) -> Goal:
         p = self.params
-        hx, hy, _ = self.home
+        hx, hy = r.x, r.y
         if r.phase == "climb":
             if st.landed:
                 r.phase = "done"
