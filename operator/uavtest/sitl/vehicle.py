@@ -231,7 +231,7 @@ class Vehicle:
         replies = self.mission_proto.handle(msg, self.time_us, self.nav.current)
         if replies is not None:
             if self.mission_proto.installed is not None:
-                self.nav.set_mission(self.mission_proto.installed)
+                self.nav.set_mission(self.mission_proto.installed, self.time_us / 1e6)
                 self.mission_proto.installed = None
                 self.drain_nav_events()
                 self._log_mission_result()
@@ -285,7 +285,7 @@ class Vehicle:
         return []
 
     def _on_mission_set_current(self, msg: Msg) -> list[Msg]:
-        self.nav.set_current(int(msg.get("seq", 0)))
+        self.nav.set_current(int(msg.get("seq", 0)), self.time_us / 1e6)
         self.drain_nav_events()
         return []
 
@@ -384,6 +384,11 @@ class Vehicle:
             elif ev.kind is EventKind.TEXT:
                 severity, text = ev.value  # type: ignore[misc]
                 self.text(severity, text)
+            elif ev.kind is EventKind.RTL and self.commander.nav_state == NavState.AUTO_MISSION:
+                self.recorder.data(
+                    topics.command(t, int(mav.MavCmd.NAV_RETURN_TO_LAUNCH), (0.0,) * 7, (1, 1), (1, 1), False)
+                )
+                self.commander.set_mode(NavState.AUTO_RTL)
             elif ev.kind is EventKind.HOLD and self.commander.nav_state == NavState.AUTO_TAKEOFF:
                 self.commander.user_nav_state = NavState.AUTO_LOITER
                 self.commander.switch(NavState.AUTO_LOITER, t, hold_z=float(ev.value))  # type: ignore[arg-type]

@@ -187,24 +187,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "7852a3f65247e56351d6b54a904133e0a65a78b9ec99ca687efce6a7f9279cad",
+        "f7b37bdc81915d86e6301d2b85781888c17454aff12c2ee7c6aa32d85331d525",
         "efab30fdb9430e6a57c40b31f18b85a7c4c7f598d13b80b0de9aff6ff0a49373",
     ),
     "manual_and_rtl": (
-        "ac18e3eb17a464e5d93a6d2ec54f7513c0714be7b43ed845412b2a5f10959edc",
+        "389314d3db46a32969c24089115e46446107f84b312cab52deed6e9296f5432e",
         "dfc0127caac19d4d9b38cd87ee690509676fde0f8065945286e56dcea7a23a17",
     ),
     "datalink_loss": (
-        "d0e8bc1ebd17bc14075b6be270092365c8a41873a1c1bd4ff18b0bb1ebfa878b",
+        "463868affe503904b6647aec65cdf733c6b95a1155bcda40bc5c258dd93df000",
         "ff4898f6792fbcd984e2d98f01a426d6b5be6a9ed7dfc5aeed77b88c0382b96b",
     ),
     "crash": (
-        "b1cd832f5c3d946a53948e40614c83a5c299cb84f4caa2f1e5278a43ecf7c741",
+        "403f652ee5bdbc02ccee5520de128ba810499772340d261350efe081dd3a0277",
         "df3f32f73ba5921f4abab5f41022e0698642694272a1148a0969b969280e7215",
     ),
     "params_and_commands": (
-        "18676b70e7bed8ac8f46779bb0d833257c5d8a9643e60f3909407a6f41939ea1",
-        "2870cadfb5f6d1332a92de207f90d1d01c3f69d5b0bf85d484ea5f47d97d632e",
+        "30cf4c93dcf2f080f7984e223366d54b9cb0f42b48abf1bce46244ee2eacbda6",
+        "aa0855820179061c6f85069bdde9787fbd67146ab78926a171e83dcfabab61e5",
     ),
 }
 
