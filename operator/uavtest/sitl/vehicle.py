@@ -39,7 +39,7 @@ from uavtest.sitl.ekf2 import Estimator
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.land_detector import LandDetector
 from uavtest.sitl.mav import LandedState, MavSeverity, Msg, ParamType
-from uavtest.sitl.mavlink_streams import STREAMS, SW_VERSION
+from uavtest.sitl.mavlink_streams import ORBIT_STATUS_HZ, STREAMS, SW_VERSION, orbit_execution_status
 from uavtest.sitl.mc_pos_control import IDLE, Controller, Goal, GoalKind, Limits
 from uavtest.sitl.mission import NavItem
 from uavtest.sitl.navigator import EventKind, Navigator, State
@@ -57,6 +57,7 @@ STEP_US = 4_000  # 250 Hz physics
 CONTROL_EVERY = 5  # 50 Hz control
 CONTROL_DT = STEP_US * CONTROL_EVERY / 1e6
 
+_ORBIT_STATUS_EVERY = round(50 / ORBIT_STATUS_HZ)  # control ticks
 _NEEDS_FIX = frozenset({"GLOBAL_POSITION_INT", "HOME_POSITION"})  # PX4 sends them once it has a fix
 _SETPOINT_TYPE = {
     GoalKind.POSITION: topics.SETPOINT_TYPE_POSITION,
@@ -335,6 +336,8 @@ class Vehicle:
         for name in self.schedule.due(t):
             if ready or name not in _NEEDS_FIX:
                 self._out.append(STREAMS[name](self, t))
+        if commander.nav_state is NavState.ORBIT and self._tick % (CONTROL_EVERY * _ORBIT_STATUS_EVERY) == 0:
+            self._out.append(orbit_execution_status(self, t))
         self._log(t)
         if commander.close_log:
             commander.close_log = False

@@ -189,8 +189,9 @@ def test_orbit_circles_the_centre_at_the_radius_clockwise_facing_the_centre():
     v.fly_until(lambda v: not v.nav.orbit.approach, 60_000_000)
     v.fly_until(lambda v: False, 3_000_000)  # on the circle within 2 m (PX4), then settles
     angles = []
+    status = []
     for _ in range(100):
-        v.advance(v.time_us + 200_000)
+        status += [m for m in v.advance(v.time_us + 200_000) if m.name == "ORBIT_EXECUTION_STATUS"]
         d = math.hypot(v.st.x - cx, v.st.y - cy)
         assert abs(d - 8.0) < 1.0
         facing = math.atan2(cy - v.st.y, cx - v.st.x)
@@ -200,6 +201,14 @@ def test_orbit_circles_the_centre_at_the_radius_clockwise_facing_the_centre():
     assert swept > 1.5  # clockwise (north → east), ~2 m/s over 20 s on r = 8: 5 rad ideally
     st = v.nav.orbit.status()
     assert st.radius == 8.0 and abs(st.x - cx) < 1e-6
+    assert 35 <= len(status) <= 45  # 2 Hz over 20 s
+    f = status[-1].fields
+    assert (
+        f["radius"] == 8.0
+        and f["frame"] == 0
+        and f["x"] == round(lat * 1e7)
+        and abs(f["z"] - HOME.alt - 10) < 1e-3
+    )
 
 
 def test_orbit_negative_radius_is_counter_clockwise_and_too_large_radius_is_refused():
