@@ -317,3 +317,46 @@ def test_mavsdk_goto_location_and_do_orbit(sitl_port: int):
         return abs(math.hypot(p.north_m, p.east_m) - 5.0) < 1.5
 
     eventually(on_circle, 30, "the orbit circle")
+
+
+# ---------------------------------------------------------------- uavtest run
+
+
+def test_uavtest_run_flies_speed_goto_orbit_land_start_and_return(repo_root: Path, tmp_path: Path):
+    from pyulog import ULog
+
+    from harness.engine_cli import uavtest_run
+
+    out = uavtest_run(repo_root / "examples/navigator-commands.yaml", tmp_path)
+    assert out.code == 0, out.stderr[-3000:]
+    assert out.summary is not None and out.summary["passed"] == 2
+    log = next(tmp_path.rglob("replica-0/flight.ulg"))
+    ulog = ULog(str(log))
+    status = ulog.get_dataset("vehicle_status").data
+    states = [int(s) for i, s in enumerate(status["nav_state"]) if i == 0 or s != status["nav_state"][i - 1]]
+    assert states[-4:] == [3, 4, 21, 5]  # mission → hold (goto) → orbit → return
+    acks = ulog.get_dataset("vehicle_command_ack").data
+    results = dict(zip((int(c) for c in acks["command"]), (int(r) for r in acks["result"]), strict=True))
+    assert results[178] == 0 and results[192] == 0 and results[34] == 0
+    assert results[189] == 6  # DO_LAND_START without a landing sequence: CANCELLED, as PX4
+    texts = [m.message for m in ulog.logged_messages]
+    assert "planned mission landing not available" in texts and "Disarmed by landing" in texts
+
+
+def test_uavtest_run_yaw_command_is_an_error_naming_it(repo_root: Path, tmp_path: Path):
+    from harness.engine_cli import uavtest_run
+
+    test = tmp_path / "yaw.yaml"
+    test.write_text(
+        (repo_root / "examples/hover.yaml")
+        .read_text()
+        .replace("replicas: 3", "replicas: 1")
+        .replace(
+            "    - {at: 1, action: mode, mode: mission}   # arms and starts the mission, as Aerialist does",
+            "    - {at: 1, action: mode, mode: mission}\n    - {at: 12, action: yaw, yaw: {heading: 90}}",
+        )
+    )
+    out = uavtest_run(test, tmp_path / "out")
+    assert out.summary is not None, out.stderr[-3000:]
+    (r,) = out.summary["results"]
+    assert r["verdict"] == "error" and "does not support MAV_CMD_CONDITION_YAW" in r["reason"]
