@@ -57,7 +57,8 @@ STEP_US = 4_000  # 250 Hz physics
 CONTROL_EVERY = 5  # 50 Hz control
 CONTROL_DT = STEP_US * CONTROL_EVERY / 1e6
 
-_ORBIT_STATUS_EVERY = round(50 / ORBIT_STATUS_HZ)  # control ticks
+_ORBIT_STATUS_EVERY = round(50 / ORBIT_STATUS_HZ) * CONTROL_EVERY  # physics ticks
+_ORBIT = NavState.ORBIT  # a module constant: enum attribute lookups cost in the 50 Hz tick
 _NEEDS_FIX = frozenset({"GLOBAL_POSITION_INT", "HOME_POSITION"})  # PX4 sends them once it has a fix
 _SETPOINT_TYPE = {
     GoalKind.POSITION: topics.SETPOINT_TYPE_POSITION,
@@ -336,7 +337,7 @@ class Vehicle:
         for name in self.schedule.due(t):
             if ready or name not in _NEEDS_FIX:
                 self._out.append(STREAMS[name](self, t))
-        if commander.nav_state is NavState.ORBIT and self._tick % (CONTROL_EVERY * _ORBIT_STATUS_EVERY) == 0:
+        if commander.nav_state is _ORBIT and self._tick % _ORBIT_STATUS_EVERY == 0:
             self._out.append(orbit_execution_status(self, t))
         self._log(t)
         if commander.close_log:
