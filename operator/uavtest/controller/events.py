@@ -8,7 +8,7 @@ from pydantic import BaseModel, ConfigDict
 
 from uavtest.analysis.models import RunSummary, Verdict
 from uavtest.controller.names import EventReason, Phase
-from uavtest.engine.outcome import summary_line
+from uavtest.engine.outcome import run_warnings, summary_line
 
 __all__ = ["MAX_LISTED", "EventSpec", "events_for"]
 
@@ -24,7 +24,8 @@ class EventSpec(BaseModel):
 
 
 def events_for(summary: RunSummary, phase: Phase) -> list[EventSpec]:
-    """TestPassed or TestFailed, FlakyTest when flaky, one ReplicaError when replicas had bench errors."""
+    """TestPassed or TestFailed, FlakyTest when flaky, one ReplicaError when replicas had bench errors,
+    one SimulatorLimits when the simulator could not simulate part of the test."""
     line = summary_line(summary)
     out: list[EventSpec] = []
     if phase == Phase.SUCCEEDED:
@@ -51,4 +52,9 @@ def events_for(summary: RunSummary, phase: Phase) -> list[EventSpec]:
         more = f"; and {len(errors) - MAX_LISTED} more" if len(errors) > MAX_LISTED else ""
         message = f"{len(errors)} of {summary.replicas} replicas had bench errors: {'; '.join(listed)}{more}"
         out.append(EventSpec(type="Warning", reason=EventReason.REPLICA_ERROR, message=message[:1024]))
+    limits = run_warnings(summary)
+    if limits:
+        out.append(
+            EventSpec(type="Warning", reason=EventReason.SIMULATOR_LIMITS, message="; ".join(limits)[:1024])
+        )
     return out

@@ -94,5 +94,6 @@ class EventReason(StrEnum):
     TEST_FAILED = "TestFailed"
     FLAKY_TEST = "FlakyTest"
     REPLICA_ERROR = "ReplicaError"
+    SIMULATOR_LIMITS = "SimulatorLimits"
     STORE_UNAVAILABLE = "StoreUnavailable"
     INVALID_SPEC = "InvalidSpec"

@@ -33,7 +33,7 @@ from uavtest.analysis.models import RunSummary, Verdict
 from uavtest.controller.names import ConditionReason, ConditionType, Phase, Reason
 from uavtest.controller.progress import FINISHED, Progress, ReplicaState, progress_of
 from uavtest.controller.views import JobView, PodView, UavTestView
-from uavtest.engine.outcome import exit_code, summary_line
+from uavtest.engine.outcome import exit_code, run_warnings, summary_line
 from uavtest.errors import ExitCode
 from uavtest.spec.status import (
     Artifacts,
@@ -280,6 +280,7 @@ def _final_status(
         conditions=conds,
         results=results,
         results_omitted=omitted,
+        warnings=run_warnings(summary),
     )
 
 

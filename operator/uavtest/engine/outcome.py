@@ -15,7 +15,7 @@ from rich.table import Table
 from uavtest.analysis.models import ReplicaResult, RunSummary, Stats, Verdict
 from uavtest.errors import ExitCode
 
-__all__ = ["exit_code", "results_table", "summary_line", "unmodelled_line"]
+__all__ = ["exit_code", "results_table", "run_warnings", "summary_line", "unmodelled_line"]
 
 _STYLE = {Verdict.PASS: "green", Verdict.FAIL: "red", Verdict.ERROR: "yellow"}
 
@@ -89,3 +89,12 @@ def unmodelled_line(summary: RunSummary) -> str | None:
 
     notice = unmodelled_notice(summary.unmodelled_params)
     return f"warning: {notice}" if notice else None
+
+
+def run_warnings(summary: RunSummary) -> list[str]:
+    """What the run could not simulate, each once: the simulator's limits (e.g. PX4 SIH has no
+    obstacles and no wind) and the PX4 parameters the built-in simulator ignores."""
+    from uavtest.spec.px4_params import unmodelled_notice
+
+    notice = unmodelled_notice(summary.unmodelled_params)
+    return list(dict.fromkeys([*summary.warnings, *([notice] if notice else [])]))

@@ -2,10 +2,13 @@
 
 Does what a MAVLink client would: wait until ready, arm, switch to mission mode, then step
 the vehicle until it disarms (or a limit), recording the true trajectory and mission events.
+The vehicle has no MAVLink link here (``SimConfig.links`` empty): it builds no telemetry stream
+nobody reads, only the broadcast events (STATUSTEXT, MISSION_ITEM_REACHED) ``Flight`` records.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -55,7 +58,7 @@ def fly_mission(
     limit_s: float = 600.0,
     sample_us: int = 100_000,
 ) -> Flight:
-    vehicle = Vehicle(config, sink)
+    vehicle = Vehicle(dataclasses.replace(config, links=()), sink)
     vehicle.load_mission(list(items))
     flight = Flight(vehicle=vehicle)
     vehicle.fly_until(lambda v: v.ready, 10_000_000)

@@ -11,8 +11,12 @@ shared log folder, QGC's log download) fetches our ``.ulg`` as it fetches PX4's:
   (possibly empty) ends the stream. An unknown id is ignored, as PX4 does.
 - ``LOG_REQUEST_END`` stops the stream.
 
-Only closed logs are listed: the one being written is not a log yet. The data is streamed in
-batches (``next_batch``) so the I/O loop can pace it as PX4 paces its stream: a burst of a whole
+The logs are what is in the log folder (``log_folder``), as PX4's log handler lists its
+``log/`` directory: logs left by earlier runs too, ordered by date, each ``LOG_ENTRY.time_utc``
+the log's date (the ``YYYY-MM-DD/HH_MM_SS.ulg`` of a PX4 log, else the file's modification
+time). Only closed logs are listed: the one being written (``.ulg.part``) is not a log yet.
+The data is streamed in batches (``next_batch``) so the I/O loop can pace it as PX4 paces
+its stream: a burst of a whole
 log would overflow the client's UDP buffer.
 """
 
@@ -20,16 +24,38 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable, Sequence
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import BinaryIO
 
 from uavtest.sitl.mav import Msg
 
-__all__ = ["CHUNK", "LogServer"]
+__all__ = ["CHUNK", "LogServer", "log_folder", "log_time_utc"]
 
 log = logging.getLogger(__name__)
 
 CHUNK = 90  # LOG_DATA.data
+
+
+def log_time_utc(path: Path) -> int:
+    """The log's date (Unix s): from a PX4 ``YYYY-MM-DD/HH_MM_SS.ulg`` name (UTC), else its mtime."""
+    try:
+        stamp = datetime.strptime(f"{path.parent.name} {path.stem}", "%Y-%m-%d %H_%M_%S")
+        return int(stamp.replace(tzinfo=UTC).timestamp())
+    except ValueError:
+        return int(path.stat().st_mtime)
+
+
+def log_folder(directory: Path) -> Callable[[], list[Path]]:
+    """The finished ``.ulg`` files under ``directory`` (PX4's dated subfolders too), oldest first."""
+
+    def logs() -> list[Path]:
+        if not directory.is_dir():
+            return []
+        found = [(log_time_utc(p), str(p), p) for p in directory.rglob("*.ulg") if p.is_file()]
+        return [p for _, _, p in sorted(found)]
+
+    return logs
 
 
 class LogServer:
@@ -74,7 +100,7 @@ class LogServer:
                     "num_logs": len(logs),
                     "last_log_num": last,
                     "size": logs[i].stat().st_size,
-                    "time_utc": 0,  # simulated flights have no wall-clock date
+                    "time_utc": log_time_utc(logs[i]),
                 },
             )
             for i in range(first, last + 1)

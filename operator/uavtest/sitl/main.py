@@ -4,8 +4,10 @@ This is the I/O edge around the pure ``Vehicle``:
 
 - two MAVLink links like PX4 SITL's: the API link sends from local port ``api_port + 40``
   (14580) to ``host:api_port`` (14540), the GCS link from 18570 to ``host:gcs_port`` (14550).
-  Each link answers wherever its client's packets come from. The GCS link sends only
-  heartbeats and status texts until a ground station has spoken on it.
+  Each link answers wherever its client's packets come from. Each streams its own telemetry
+  from boot at PX4's rates for its mode (``telemetry.MODES``, as ``px4-rc.mavlink`` starts
+  them: the API link ONBOARD, the GCS link NORMAL with its SITL 50 Hz streams), as PX4 SITL
+  streams to 127.0.0.1:14550 before any ground station has spoken.
 - lockstep (``--lockstep``): the vehicle clock moves only when a client grants time. The sim
   announces ``NAMED_VALUE_INT(time_boot_ms=T, name="LOCKSTEP", value=T)`` once everything due
   at T is sent; a grant is ``NAMED_VALUE_INT(name="LOCKSTEP", value=T_until)``; messages that
@@ -30,6 +32,7 @@ This is the I/O edge around the pure ``Vehicle``:
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import logging
 import os
 import select
@@ -42,9 +45,10 @@ from pathlib import Path
 from types import FrameType
 
 from uavtest.errors import BadInput, InfrastructureError
-from uavtest.sitl.logserver import LogServer
+from uavtest.sitl.logserver import LogServer, log_folder
 from uavtest.sitl.mav import Msg
 from uavtest.sitl.mavlink_io import Codec
+from uavtest.sitl.telemetry import ONBOARD
 from uavtest.sitl.ulog_writer import ULogFile
 from uavtest.sitl.vehicle import STEP_US, SimConfig, Vehicle
 
@@ -59,6 +63,18 @@ IDLE_EXIT_S = 60.0  # lockstep: wall seconds without client traffic before the s
 DATAGRAM_BYTES = 1400
 LOG_PACE_S = 0.002  # one batch of LOG_DATA (32 x 90 bytes) per 2 ms: ~1.4 MB/s, as a client can read
 _ALWAYS = frozenset({"HEARTBEAT", "STATUSTEXT", "NAMED_VALUE_INT"})
+#: px4-rc.mavlink: the API/offboard link in mode ONBOARD, the GCS link NORMAL + its 50 Hz streams
+LINK_MODES = (("api", ONBOARD), ("gcs", "sitl_gcs"))
+#: the host clock at boot (Unix µs); the UAVTEST_SITL_UTC environment variable pins it (seconds)
+UTC_ENV = "UAVTEST_SITL_UTC"
+
+
+def utc_boot_us() -> int:
+    """Unix time of boot in µs, for SYSTEM_TIME: the host clock, or ``$UAVTEST_SITL_UTC`` (s)."""
+    pinned = os.environ.get(UTC_ENV)
+    if pinned:
+        return int(float(pinned) * 1e6)
+    return time.time_ns() // 1000
 
 
 class FileLogSink:
@@ -101,6 +117,7 @@ class Link:
     codec: Codec = field(default_factory=Codec)
     peer_seen: bool = False
     always_stream: bool = True
+    announce: bool = True  # lockstep announces every step (the GCS link: only once a client spoke)
     _buf: bytearray = field(default_factory=bytearray)
 
     def queue(self, msg: Msg) -> None:
@@ -204,6 +221,7 @@ class _Edge:
         self.vehicle = vehicle
         self.links = links
         self.by_fd = {link.sock.fileno(): link for link in links}
+        self.index = {id(link): i for i, link in enumerate(links)}
         self.log_server = log_server
         self.log_link: Link | None = None  # the link a log download was asked on
         self.lockstep = lockstep
@@ -217,13 +235,19 @@ class _Edge:
         for link in self.links:
             link.flush()
 
+    def send_vehicle_output(self) -> None:
+        """The vehicle's messages for each link (broadcasts and that link's telemetry)."""
+        for link, msgs in zip(self.links, self.vehicle.drain_links(), strict=True):
+            for msg in msgs:
+                link.queue(msg)
+
     def announce(self, *, everywhere: bool) -> None:
         """The lockstep announce, last in the step's datagram; links nobody spoke on get it only
         on the wall-clock re-announce (a client that binds their port later still finds it)."""
         t_ms = self.vehicle.time_us // 1000
         msg = Msg("NAMED_VALUE_INT", {"time_boot_ms": t_ms, "name": LOCKSTEP_NAME, "value": t_ms})
         for link in self.links:
-            if everywhere or link.peer_seen or link.always_stream:
+            if everywhere or link.peer_seen or link.announce:
                 link.queue(msg)
 
     def handle(self, link: Link, data: bytes, addr: tuple[str, int]) -> bool:
@@ -236,17 +260,18 @@ class _Edge:
             if msg.name == "NAMED_VALUE_INT" and str(msg.get("name", "")).rstrip("\x00") == LOCKSTEP_NAME:
                 until_us = int(msg.get("value", 0)) * 1000
                 if self.lockstep and until_us > vehicle.time_us:
-                    self.broadcast(vehicle.advance(until_us))
+                    vehicle.advance(until_us, drain=False)
+                    self.send_vehicle_output()
                     granted = True
                 continue
             replies = self.log_server.handle(msg)
             if replies is not None:
                 self.log_link = link
             else:
-                replies = vehicle.receive(msg)
+                replies = vehicle.receive(msg, self.index[id(link)])
             for reply in replies:
                 link.queue(reply)
-            self.broadcast(vehicle.drain())
+            self.send_vehicle_output()
         return granted
 
     def receive(self, link: Link, watch: _Watch | None) -> bool:
@@ -303,7 +328,8 @@ class _Clock:
         vehicle = edge.vehicle
         target = self.sim0 + int((now - self.wall0) * self.speed_factor * 1e6)
         if target >= vehicle.time_us + STEP_US:
-            edge.broadcast(vehicle.advance(target))
+            vehicle.advance(target, drain=False)
+            edge.send_vehicle_output()
             edge.flush()
         return max(0.0005, STEP_US * 5 / 1e6 / self.speed_factor)
 
@@ -340,13 +366,14 @@ def run_sitl(
     with _signals() as (stop, wakeup):  # before the log file appears: a SIGTERM from then on closes it
         config = load_config(test, seed)
         sink = FileLogSink(log_dir, seed)
+        config = dataclasses.replace(config, utc_boot_us=utc_boot_us(), links=LINK_MODES)
         vehicle = Vehicle(config, sink)
         local_api = api_port + 40 if api_local_port is None else api_local_port
         links = [
             Link("api", _bind(host, local_api), (host, api_port)),
-            Link("gcs", _bind(host, gcs_local_port), (host, gcs_port), always_stream=False),
+            Link("gcs", _bind(host, gcs_local_port), (host, gcs_port), announce=False),
         ]
-        edge = _Edge(vehicle, links, LogServer(lambda: sink.closed), lockstep)
+        edge = _Edge(vehicle, links, LogServer(log_folder(log_dir)), lockstep)
         log.info(
             "uavtest sitl: pid %d seed %d, API %s:%d -> %s:%d, GCS %d -> %d, %s",
             os.getpid(),
@@ -396,7 +423,7 @@ def _loop(
     vehicle, lockstep, log_server = edge.vehicle, edge.lockstep, edge.log_server
     wall0 = time.monotonic()
     clock = _Clock(speed_factor, wall0, vehicle.time_us)
-    edge.broadcast(vehicle.drain())
+    edge.send_vehicle_output()
     if lockstep:
         edge.announce(everywhere=True)
     edge.flush()

@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING
 from uavtest.px4.modes import NavState, base_mode_flags, custom_mode
 from uavtest.sitl import mav
 from uavtest.sitl.mav import MavState, Msg
+from uavtest.sitl.simulator_sih import DRAG_VERTICAL, GRAVITY
+from uavtest.sitl.uorb import quaternion
 
 if TYPE_CHECKING:
     from uavtest.sitl.vehicle import Vehicle
@@ -126,7 +128,187 @@ def sys_status(v: Vehicle, t: int) -> Msg:
 
 
 def system_time(v: Vehicle, t: int) -> Msg:
-    return Msg("SYSTEM_TIME", {"time_unix_usec": 0, "time_boot_ms": t // 1000})
+    """Host clock at boot + vehicle time (``SimConfig.utc_boot_us``; 0 in-process: 1970)."""
+    utc = v.config.utc_boot_us
+    return Msg("SYSTEM_TIME", {"time_unix_usec": utc + t if utc else 0, "time_boot_ms": t // 1000})
+
+
+# ---------------------------------------------------------------- attitude, odometry, sensors
+
+#: Earth magnetic field (gauss, NED) the simulated magnetometer reads (mid-latitude Europe)
+MAG_NED = (0.21, 0.01, 0.43)
+BARO_TEMPERATURE_C = 20.0  # constant: the simulator models no temperature
+_ISA_P0 = 101325.0  # Pa
+
+
+def _attitude(v: Vehicle) -> tuple[float, float, float]:
+    roll, pitch = v.body.tilt()
+    return roll, pitch, v.st.yaw
+
+
+def _to_body(
+    roll: float, pitch: float, yaw: float, n: float, e: float, d: float
+) -> tuple[float, float, float]:
+    """A NED vector in the body frame (FRD) of ZYX Euler angles: R(yaw, pitch, roll)^T v."""
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    x1 = cy * n + sy * e  # undo yaw
+    y1 = -sy * n + cy * e
+    x2 = cp * x1 - sp * d  # undo pitch
+    z2 = sp * x1 + cp * d
+    return x2, cr * y1 + sr * z2, -sr * y1 + cr * z2  # undo roll
+
+
+def isa_pressure_hpa(alt_amsl: float) -> float:
+    """ISA static pressure (hPa) at an altitude above mean sea level (troposphere)."""
+    return _ISA_P0 * (1.0 - 2.25577e-5 * alt_amsl) ** 5.25588 / 100.0
+
+
+def attitude_quaternion(v: Vehicle, t: int) -> Msg:
+    """streams/ATTITUDE_QUATERNION.hpp: vehicle_attitude.q (w, x, y, z), body rates."""
+    q = quaternion(*_attitude(v))
+    return Msg(
+        "ATTITUDE_QUATERNION",
+        {
+            "time_boot_ms": t // 1000,
+            "q1": q[0],
+            "q2": q[1],
+            "q3": q[2],
+            "q4": q[3],
+            "rollspeed": 0.0,
+            "pitchspeed": 0.0,
+            "yawspeed": v.body.yawrate,
+            "repr_offset_q": [0.0, 0.0, 0.0, 0.0],
+        },
+    )
+
+
+def odometry(v: Vehicle, t: int) -> Msg:
+    """streams/ODOMETRY.hpp from ekf2's vehicle_odometry: pose in LOCAL_NED, velocity in NED
+    (ekf2 publishes VELOCITY_FRAME_NED), variances on the diagonals, the rest NaN."""
+    b, e, st = v.body, v.est, v.st
+    pose_cov = [math.nan] * 21
+    vel_cov = [math.nan] * 21
+    pose_cov[0] = pose_cov[6] = 0.12**2  # ekf2.SIGMA_XY
+    pose_cov[11] = 0.08**2  # ekf2.SIGMA_Z
+    pose_cov[15] = pose_cov[18] = pose_cov[20] = 0.005**2
+    vel_cov[0] = vel_cov[6] = vel_cov[11] = 0.03**2
+    return Msg(
+        "ODOMETRY",
+        {
+            "time_usec": t,
+            "frame_id": 1,  # MAV_FRAME_LOCAL_NED
+            "child_frame_id": 1,  # MAV_FRAME_LOCAL_NED: velocity in NED
+            "x": st.x,
+            "y": st.y,
+            "z": st.z,
+            "q": list(quaternion(*_attitude(v))),
+            "vx": b.vx + e.evx,
+            "vy": b.vy + e.evy,
+            "vz": b.vz + e.evz,
+            "rollspeed": 0.0,
+            "pitchspeed": 0.0,
+            "yawspeed": b.yawrate,
+            "pose_covariance": pose_cov,
+            "velocity_covariance": vel_cov,
+            "reset_counter": 0,
+            "estimator_type": 8,  # MAV_ESTIMATOR_TYPE_AUTOPILOT
+            "quality": 0,
+        },
+    )
+
+
+def altitude(v: Vehicle, t: int) -> Msg:
+    """streams/ALTITUDE.hpp: baro (monotonic), AMSL, local -z, relative to home; no terrain."""
+    st = v.st
+    amsl = v.home_alt - st.z
+    return Msg(
+        "ALTITUDE",
+        {
+            "time_usec": t,
+            "altitude_monotonic": v.home_alt - v.body.z,
+            "altitude_amsl": amsl,
+            "altitude_local": -st.z,
+            "altitude_relative": -(st.z - v.home[2]),
+            "altitude_terrain": math.nan,
+            "bottom_clearance": math.nan,
+        },
+    )
+
+
+def highres_imu(v: Vehicle, t: int) -> Msg:
+    """streams/HIGHRES_IMU.hpp from the true body: specific force (thrust + drag, minus gravity;
+    -g on the ground) and the magnetic field rotated into the body frame, body rates, baro from
+    the ISA at the true altitude, constant temperature."""
+    b, w = v.body, v.wind
+    roll, pitch, yaw = _attitude(v)
+    if b.on_ground:
+        fn, fe, fd = 0.0, 0.0, -GRAVITY
+    else:
+        rx, ry = b.vx - w.n, b.vy - w.e
+        drag = b.kl + b.kq * math.sqrt(rx * rx + ry * ry)
+        fn = b.ax - drag * rx
+        fe = b.ay - drag * ry
+        fd = b.az - DRAG_VERTICAL * (b.vz - w.d) - GRAVITY
+    ax, ay, az = _to_body(roll, pitch, yaw, fn, fe, fd)
+    mx, my, mz = _to_body(roll, pitch, yaw, *MAG_NED)
+    alt = v.home_alt - b.z
+    return Msg(
+        "HIGHRES_IMU",
+        {
+            "time_usec": t,
+            "xacc": ax,
+            "yacc": ay,
+            "zacc": az,
+            "xgyro": 0.0,
+            "ygyro": 0.0,
+            "zgyro": b.yawrate,
+            "xmag": mx,
+            "ymag": my,
+            "zmag": mz,
+            "abs_pressure": isa_pressure_hpa(alt),
+            "diff_pressure": 0.0,
+            "pressure_alt": alt,
+            "temperature": BARO_TEMPERATURE_C,
+            "fields_updated": 0x1FFF,
+            "id": 0,
+        },
+    )
+
+
+def scaled_pressure(v: Vehicle, t: int) -> Msg:
+    """streams/SCALED_PRESSURE.hpp: the baro's pressure (ISA at the true altitude), cdegC."""
+    return Msg(
+        "SCALED_PRESSURE",
+        {
+            "time_boot_ms": t // 1000,
+            "press_abs": isa_pressure_hpa(v.home_alt - v.body.z),
+            "press_diff": 0.0,
+            "temperature": round(BARO_TEMPERATURE_C * 100),
+            "temperature_press_diff": 0,
+        },
+    )
+
+
+def wind_cov(v: Vehicle, t: int) -> Msg:
+    """streams/WIND_COV.hpp: the wind (north, east; z 0 as PX4), variance of the gust model,
+    at the vehicle's AMSL altitude."""
+    w = v.wind
+    return Msg(
+        "WIND_COV",
+        {
+            "time_usec": t,
+            "wind_x": w.n,
+            "wind_y": w.e,
+            "wind_z": 0.0,
+            "var_horiz": 2.0 * w.sigma * w.sigma,
+            "var_vert": 0.0,
+            "wind_alt": v.home_alt - v.st.z,
+            "horiz_accuracy": 0.0,
+            "vert_accuracy": 0.0,
+        },
+    )
 
 
 def home_position(v: Vehicle, t: int) -> Msg:
@@ -277,4 +459,10 @@ STREAMS: dict[str, Callable[[Vehicle, int], Msg]] = {
     "VFR_HUD": vfr_hud,
     "BATTERY_STATUS": battery_status,
     "GPS_RAW_INT": gps_raw_int,
+    "ATTITUDE_QUATERNION": attitude_quaternion,
+    "ODOMETRY": odometry,
+    "ALTITUDE": altitude,
+    "HIGHRES_IMU": highres_imu,
+    "SCALED_PRESSURE": scaled_pressure,
+    "WIND_COV": wind_cov,
 }

@@ -1,31 +1,81 @@
-"""The telemetry streams PX4 sends, scheduled on the simulated clock.
+"""The telemetry streams PX4 sends, per MAVLink link, scheduled on the simulated clock.
 
-Rates (Hz) are close to PX4's MAVLink "onboard"/"normal" modes, kept modest so that a
-simulator running hundreds of times faster than real time stays cheap; SET_MESSAGE_INTERVAL
-changes them. Each stream names the MAVLink message and its id (for SET_MESSAGE_INTERVAL).
+PX4 gives each MAVLink instance a mode whose default stream rates come from
+``src/modules/mavlink/mavlink_main.cpp`` ``Mavlink::configure_streams_to_default``; PX4 SITL
+(``ROMFS/px4fmu_common/init.d-posix/px4-rc.mavlink``) starts the GCS link (local 18570, remote
+14550) in mode NORMAL with some streams raised to 50 Hz (``mavlink stream -r 50``), and the
+API/offboard link (local 14580, remote 14540) in mode ONBOARD. ``MODES`` holds those tables,
+restricted to the messages the built-in vehicle builds (``mavlink_streams.STREAMS``).
+
+Rates above the 50 Hz control tick (ONBOARD ATTITUDE at 100 Hz) are sent once per tick: 50 Hz.
+PX4's "unlimited" rate (a message per uORB update) is the sensor's rate: GPS_RAW_INT at the
+simulated GPS's 10 Hz. HEARTBEAT is sent at 1 Hz on every link whatever the mode (PX4
+``Mavlink::task_main`` sends it itself) and cannot be changed by SET_MESSAGE_INTERVAL
+(``MavlinkReceiver::set_message_interval`` refuses message id 0).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["DEFAULT_RATES", "MESSAGE_IDS", "Schedule"]
+__all__ = ["DEFAULT_RATES", "MESSAGE_IDS", "MODES", "NORMAL", "ONBOARD", "Schedule"]
 
-#: message name → default rate in Hz
-DEFAULT_RATES: dict[str, float] = {
-    "HEARTBEAT": 1.0,
-    "SYS_STATUS": 1.0,
-    "SYSTEM_TIME": 1.0,
-    "EXTENDED_SYS_STATE": 2.0,
-    "ATTITUDE": 10.0,
-    "LOCAL_POSITION_NED": 10.0,
-    "GLOBAL_POSITION_INT": 5.0,
-    "HOME_POSITION": 0.5,
-    "MISSION_CURRENT": 1.0,
-    "VFR_HUD": 2.0,
-    "BATTERY_STATUS": 0.5,
-    "GPS_RAW_INT": 1.0,
+NORMAL = "normal"
+ONBOARD = "onboard"
+
+#: mode → message name → default rate in Hz (mavlink_main.cpp configure_streams_to_default)
+MODES: dict[str, dict[str, float]] = {
+    NORMAL: {
+        "HEARTBEAT": 1.0,
+        "ALTITUDE": 1.0,
+        "ATTITUDE": 15.0,
+        "ATTITUDE_QUATERNION": 10.0,
+        "BATTERY_STATUS": 0.5,
+        "EXTENDED_SYS_STATE": 1.0,
+        "GLOBAL_POSITION_INT": 5.0,
+        "GPS_RAW_INT": 5.0,
+        "HOME_POSITION": 0.5,
+        "LOCAL_POSITION_NED": 1.0,
+        "MISSION_CURRENT": 1.0,  # MavlinkMissionManager, not a configured stream
+        "SCALED_PRESSURE": 1.0,
+        "SYS_STATUS": 1.0,
+        "VFR_HUD": 4.0,
+        "WIND_COV": 0.5,
+    },
+    ONBOARD: {
+        "HEARTBEAT": 1.0,
+        "HIGHRES_IMU": 50.0,
+        "LOCAL_POSITION_NED": 30.0,
+        "ATTITUDE": 100.0,
+        "ALTITUDE": 10.0,
+        "ODOMETRY": 30.0,
+        "ATTITUDE_QUATERNION": 50.0,
+        "BATTERY_STATUS": 0.5,
+        "EXTENDED_SYS_STATE": 5.0,
+        "GLOBAL_POSITION_INT": 50.0,
+        "GPS_RAW_INT": 10.0,  # unlimited: every GPS update
+        "HOME_POSITION": 0.5,
+        "MISSION_CURRENT": 1.0,
+        "SCALED_PRESSURE": 1.0,
+        "SYS_STATUS": 5.0,
+        "SYSTEM_TIME": 1.0,
+        "VFR_HUD": 10.0,
+        "WIND_COV": 10.0,
+    },
 }
+
+#: px4-rc.mavlink: the SITL GCS link's ``mavlink stream -r 50 -s ...`` on top of NORMAL
+SITL_GCS_RATES: dict[str, float] = {
+    **MODES[NORMAL],
+    "LOCAL_POSITION_NED": 50.0,
+    "GLOBAL_POSITION_INT": 50.0,
+    "ATTITUDE": 50.0,
+    "ATTITUDE_QUATERNION": 50.0,
+}
+MODES["sitl_gcs"] = SITL_GCS_RATES
+
+#: the single link of an in-process vehicle (what a PX4 API client on 14540 receives)
+DEFAULT_RATES = MODES[ONBOARD]
 
 #: MAVLink message ids of the streams (common.xml)
 MESSAGE_IDS: dict[int, str] = {
@@ -33,15 +83,22 @@ MESSAGE_IDS: dict[int, str] = {
     1: "SYS_STATUS",
     2: "SYSTEM_TIME",
     24: "GPS_RAW_INT",
+    29: "SCALED_PRESSURE",
     30: "ATTITUDE",
+    31: "ATTITUDE_QUATERNION",
     32: "LOCAL_POSITION_NED",
     33: "GLOBAL_POSITION_INT",
     42: "MISSION_CURRENT",
     74: "VFR_HUD",
+    105: "HIGHRES_IMU",
+    141: "ALTITUDE",
     147: "BATTERY_STATUS",
+    231: "WIND_COV",
     242: "HOME_POSITION",
     245: "EXTENDED_SYS_STATE",
+    331: "ODOMETRY",
 }
+_ID_OF = {name: mid for mid, name in MESSAGE_IDS.items()}
 
 
 @dataclass(slots=True)
@@ -52,11 +109,13 @@ class _Stream:
 
 
 class Schedule:
-    """Which streams are due at a time; intervals in microseconds of vehicle time."""
+    """Which streams are due at a time on one link; intervals in microseconds of vehicle time."""
 
     def __init__(self, rates: dict[str, float] | None = None) -> None:
-        rates = dict(DEFAULT_RATES if rates is None else rates)
-        self._streams = [_Stream(name, round(1e6 / hz) if hz > 0 else 0, 0) for name, hz in rates.items()]
+        self.defaults = dict(DEFAULT_RATES if rates is None else rates)
+        self._streams = [
+            _Stream(name, round(1e6 / hz) if hz > 0 else 0, 0) for name, hz in self.defaults.items()
+        ]
         self._by_name = {s.name: s for s in self._streams}
         self.next_due = 0
 
@@ -79,22 +138,32 @@ class Schedule:
         self.next_due = nxt
         return names
 
-    def set_interval(self, message_id: int, interval_us: int, now_us: int) -> bool:
-        """SET_MESSAGE_INTERVAL: -1 off, 0 default, else microseconds. False for unknown messages."""
+    def set_interval(self, message_id: int, interval_us: float, now_us: int) -> bool:
+        """SET_MESSAGE_INTERVAL as ``MavlinkReceiver::set_message_interval``: -1 (any negative)
+        stops the stream, 0 restores this link's default, else microseconds. False (the command
+        FAILED) for HEARTBEAT and for messages the vehicle does not stream."""
         name = MESSAGE_IDS.get(message_id)
-        if name is None:
+        if name is None or name == "HEARTBEAT":
             return False
+        if interval_us < -0.00001:
+            interval = 0
+        elif interval_us > 0.00001:
+            interval = max(round(interval_us), 1)
+        else:
+            hz = self.defaults.get(name, 0.0)
+            interval = round(1e6 / hz) if hz > 0 else 0
         stream = self._by_name.get(name)
-        if interval_us == 0:
-            hz = DEFAULT_RATES[name]
-            interval_us = round(1e6 / hz)
-        elif interval_us < 0:
-            interval_us = 0
         if stream is None:
-            stream = _Stream(name, interval_us, now_us)
+            stream = _Stream(name, interval, now_us)
             self._streams.append(stream)
             self._by_name[name] = stream
-        stream.interval_us = max(interval_us, 0)
+        stream.interval_us = interval
         stream.next_us = now_us
         self.next_due = now_us
         return True
+
+    def interval(self, message_id: int) -> int:
+        """MESSAGE_INTERVAL.interval_us as PX4's ``get_message_interval``: the stream's interval,
+        0 when the message is not streamed on this link (stopped or never configured)."""
+        stream = self._by_name.get(MESSAGE_IDS.get(message_id, ""))
+        return stream.interval_us if stream is not None else 0

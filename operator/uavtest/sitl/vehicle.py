@@ -33,12 +33,13 @@ from uavtest.px4.modes import (
 )
 from uavtest.sitl import mav
 from uavtest.sitl import uorb as topics
-from uavtest.sitl.commander.commander import Commander
-from uavtest.sitl.commander.vehicle_command import handle_command
+from uavtest.sitl.commander.commander import FLOWN_NAV_STATES, Commander
+from uavtest.sitl.commander.vehicle_command import handle_command, unsupported
 from uavtest.sitl.ekf2 import Estimator
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.land_detector import LandDetector
 from uavtest.sitl.mav import LandedState, MavSeverity, Msg, ParamType
+from uavtest.sitl.mavlink_io import custom_mode_name
 from uavtest.sitl.mavlink_streams import ORBIT_STATUS_HZ, STREAMS, SW_VERSION, orbit_execution_status
 from uavtest.sitl.mc_pos_control import IDLE, Controller, Goal, GoalKind, Limits
 from uavtest.sitl.mission import NavItem
@@ -47,7 +48,7 @@ from uavtest.sitl.params import ParamStore
 from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
 from uavtest.sitl.simulator_sih import Body, WindModel, World
-from uavtest.sitl.telemetry import Schedule
+from uavtest.sitl.telemetry import MODES, ONBOARD, Schedule
 from uavtest.sitl.ulog_writer import LOG_LEVEL
 from uavtest.spec.models import Home, Obstacle, UavTestSpec, Wind
 
@@ -79,6 +80,10 @@ class SimConfig:
     wind: Wind = field(default_factory=Wind)
     params: Mapping[str, int | float] = field(default_factory=dict)
     seed: int = 0
+    #: the host clock (Unix µs) at boot, for SYSTEM_TIME; 0 (1970) keeps a run independent of the date
+    utc_boot_us: int = 0
+    #: the MAVLink links (name, telemetry mode of ``telemetry.MODES``), each with its own schedule
+    links: tuple[tuple[str, str], ...] = (("api", ONBOARD),)
 
     @classmethod
     def from_spec(
@@ -114,7 +119,9 @@ class Vehicle:
         self.nav = Navigator(self.params, self.proj, self.home_alt, random.Random(f"{seed}:navigator"))
         self.param_proto = ParamProtocol(self.params)
         self.mission_proto = MissionProtocol()
-        self.schedule = Schedule()
+        self.link_names = [name for name, _ in config.links]
+        self.schedules = [Schedule(MODES[mode]) for _, mode in config.links]
+        self.rx_link = 0  # the link of the message being handled (SET_MESSAGE_INTERVAL applies to it)
         self.recorder = FlightRecorder(
             sink,
             {
@@ -132,8 +139,11 @@ class Vehicle:
         self.time_us = 0
         self._next_us = STEP_US
         self._tick = 0
+        self._text_id = 0  # STATUSTEXT.id of the last chunked text
         self._cmd = IDLE
-        self._out: list[Msg] = []
+        # broadcast messages (every link) are Msg; with several links, one link's telemetry is
+        # (link index, Msg) in the same list, so every link sees its messages in order
+        self._out: list[Msg | tuple[int, Msg]] = []  # type: ignore[assignment]
         self.goal = Goal()
         self.st = State()
         self.commander = Commander(self)
@@ -181,12 +191,33 @@ class Vehicle:
         """A HEARTBEAT for now (the edge repeats it while a lockstep client is silent)."""
         return STREAMS["HEARTBEAT"](self, self.time_us)
 
-    def drain(self) -> list[Msg]:
-        out, self._out = self._out, []
-        return out
+    @property
+    def schedule(self) -> Schedule:
+        """The telemetry schedule of the link the message being handled came from."""
+        return self.schedules[self.rx_link]
 
-    def advance(self, until_us: int) -> list[Msg]:
-        """Simulate up to vehicle time ``until_us``; returns the broadcast messages due meanwhile."""
+    def drain(self) -> list[Msg]:
+        """The messages for the first link (broadcasts and its telemetry); see ``drain_links``."""
+        out, self._out = self._out, []
+        if len(self.schedules) == 1:
+            return out  # type: ignore[return-value]
+        return [m if isinstance(m, Msg) else m[1] for m in out if isinstance(m, Msg) or m[0] == 0]
+
+    def drain_links(self) -> list[list[Msg]]:
+        """The messages for each link, in link order."""
+        out, self._out = self._out, []
+        per: list[list[Msg]] = [[] for _ in self.schedules]
+        for m in out:
+            if isinstance(m, Msg):
+                for lst in per:
+                    lst.append(m)
+            else:
+                per[m[0]].append(m[1])
+        return per
+
+    def advance(self, until_us: int, *, drain: bool = True) -> list[Msg]:
+        """Simulate up to vehicle time ``until_us``; returns the first link's messages due
+        meanwhile (``drain=False``: kept for ``drain_links``)."""
         body = self.body
         wind = self.wind
         world = self.world
@@ -206,7 +237,7 @@ class Vehicle:
                 self._control_tick(t)
         if until_us > self.time_us:
             self.time_us = until_us
-        return self.drain()
+        return self.drain() if drain else []
 
     def fly_until(self, condition: Callable[[Vehicle], bool], within_us: int) -> None:
         """Advance in 20 ms slices until ``condition(self)`` holds, at most ``within_us`` (tests, tools)."""
@@ -221,8 +252,9 @@ class Vehicle:
         self.nav.set_mission(items)
         self._log_mission_result()
 
-    def receive(self, msg: Msg) -> list[Msg]:
-        """Handle one message from a client; returns the replies to send back to it."""
+    def receive(self, msg: Msg, link: int = 0) -> list[Msg]:
+        """Handle one message from a client on link ``link``; returns the replies to send back to it."""
+        self.rx_link = link
         handler = self._RECEIVE.get(msg.name)
         if handler is not None:
             return handler(self, msg)
@@ -278,7 +310,11 @@ class Vehicle:
     def _on_set_mode(self, msg: Msg) -> list[Msg]:
         if msg.get("target_system", 1) in (0, mav.SYSTEM_ID):
             main, sub = split_custom_mode(int(msg.get("custom_mode", 0)))
-            self.commander.set_mode(nav_state_from_custom_mode(main, sub))
+            ns = nav_state_from_custom_mode(main, sub)
+            if ns is None or ns not in FLOWN_NAV_STATES:
+                unsupported(self, f"Mode {custom_mode_name(main, sub)}")
+            else:
+                self.commander.set_mode(ns)
         return []
 
     def _on_timesync(self, msg: Msg) -> list[Msg]:
@@ -333,16 +369,32 @@ class Vehicle:
             b.motors = False
             self.ctrl.reset(st.x, st.y, st.z, 0.0, 0.0, 0.0, st.yaw)
         self.drain_nav_events()
-        ready = commander.ready
-        for name in self.schedule.due(t):
-            if ready or name not in _NEEDS_FIX:
-                self._out.append(STREAMS[name](self, t))
+        self._stream(t)
         if commander.nav_state is _ORBIT and self._tick % _ORBIT_STATUS_EVERY == 0:
-            self._out.append(orbit_execution_status(self, t))
+            self._out.append(orbit_execution_status(self, t))  # every link (NORMAL mode's 2 Hz)
         self._log(t)
         if commander.close_log:
             commander.close_log = False
             self.recorder.stop()
+
+    def _stream(self, t: int) -> None:
+        """The telemetry due at ``t`` on each link, each message built once per tick."""
+        ready = self.commander.ready
+        schedules = self.schedules
+        out = self._out
+        if len(schedules) == 1:
+            for name in schedules[0].due(t):
+                if ready or name not in _NEEDS_FIX:
+                    out.append(STREAMS[name](self, t))
+            return
+        built: dict[str, Msg] = {}
+        for i, schedule in enumerate(schedules):
+            for name in schedule.due(t):
+                if ready or name not in _NEEDS_FIX:
+                    msg = built.get(name)
+                    if msg is None:
+                        msg = built[name] = STREAMS[name](self, t)
+                    out.append((i, msg))
 
     def _goal_for(self, t: int) -> Goal:
         """The flight task's goal: idle, the manual task of a stick mode, or the navigator's."""
@@ -411,9 +463,20 @@ class Vehicle:
 
     def text(self, severity: int, text: str) -> None:
         """A STATUSTEXT for every link, and the same line in the log."""
-        self._out.append(
-            Msg("STATUSTEXT", {"severity": int(severity), "text": text[:50], "id": 0, "chunk_seq": 0})
-        )
+        if len(text) <= 50:
+            self._out.append(
+                Msg("STATUSTEXT", {"severity": int(severity), "text": text, "id": 0, "chunk_seq": 0})
+            )
+        else:  # MAVLink 2 STATUSTEXT chunks: one id, chunk_seq 0.., a short (or empty) last chunk
+            self._text_id = self._text_id % 65535 + 1
+            for seq, i in enumerate(range(0, len(text) // 50 * 50 + 1, 50)):
+                chunk = {
+                    "severity": int(severity),
+                    "text": text[i : i + 50],
+                    "id": self._text_id,
+                    "chunk_seq": seq,
+                }
+                self._out.append(Msg("STATUSTEXT", chunk))
         level = LOG_LEVEL["info"]
         if severity <= MavSeverity.CRITICAL:
             level = LOG_LEVEL["emergency"] if severity == MavSeverity.EMERGENCY else ord("2")

@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from datetime import datetime
 from enum import StrEnum
+from typing import Annotated
 
 from pydantic import Field, field_validator
 
@@ -33,6 +34,8 @@ __all__ = [
 
 MAX_STATUS_RESULTS = 50
 MAX_REASON_LENGTH = 256
+MAX_WARNINGS = 8
+MAX_WARNING_LENGTH = 512
 
 
 class Phase(StrEnum):
@@ -154,6 +157,19 @@ class UavTestStatus(Model):
         description=f"at most {MAX_STATUS_RESULTS} finished replicas, failed first; all are in the store",
     )
     results_omitted: int = Field(0, ge=0, description="finished replicas left out of results")
+    warnings: list[Annotated[str, Field(max_length=MAX_WARNING_LENGTH)]] = Field(
+        default_factory=list,
+        max_length=MAX_WARNINGS,
+        description="what the run could not simulate (the simulator's limits, parameters without effect)",
+    )
+
+    @field_validator("warnings", mode="before")
+    @classmethod
+    def _bound_warnings(cls, value: object) -> object:
+        if isinstance(value, list):
+            cut = MAX_WARNING_LENGTH - 1
+            return [w if len(w) <= MAX_WARNING_LENGTH else w[:cut] + "…" for w in value[:MAX_WARNINGS]]
+        return value
 
 
 def compact_results(results: Iterable[ReplicaStatus]) -> tuple[list[ReplicaStatus], int]:

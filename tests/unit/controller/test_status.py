@@ -234,3 +234,32 @@ def test_a_finished_pod_the_job_has_not_recorded_yet_is_still_running() -> None:
     assert st.phase == "Running"
     retry = status(job_body(active=1), [pod_body(0, "Failed", exit_code=3)], replicas=1)
     assert (retry.running, retry.pending) == (0, 1)  # exit 3 is retried: a new pod will come
+
+
+def test_what_the_run_could_not_simulate_is_in_the_status_and_an_event() -> None:
+    from uavtest.controller.events import events_for
+    from uavtest.spec.status import MAX_WARNINGS, Phase
+
+    summary = summary_of(result(0, Verdict.PASS), result(1, Verdict.PASS)).model_copy(
+        update={
+            "warnings": ["PX4 SIH has no obstacles: they are judged against the trajectory only"],
+            "unmodelled_params": ["SDLOG_PROFILE"],
+        }
+    )
+    st = status(None, [], summary=summary)
+    assert st.warnings[0].startswith("PX4 SIH has no obstacles")
+    assert any("SDLOG_PROFILE" in w for w in st.warnings[1:])
+    limits = [e for e in events_for(summary, Phase.SUCCEEDED) if e.reason == "SimulatorLimits"]
+    assert len(limits) == 1 and limits[0].type == "Warning" and "SDLOG_PROFILE" in limits[0].message
+
+    many = summary.model_copy(update={"warnings": [f"w{i} " + "x" * 900 for i in range(20)]})
+    bounded = status(None, [], summary=many)
+    assert len(bounded.warnings) == MAX_WARNINGS and all(len(w) <= 512 for w in bounded.warnings)
+
+    quiet = status(None, [], summary=summary_of(result(0, Verdict.PASS)))
+    assert quiet.warnings == []
+    assert not [
+        e
+        for e in events_for(summary_of(result(0, Verdict.PASS)), Phase.SUCCEEDED)
+        if e.reason == "SimulatorLimits"
+    ]

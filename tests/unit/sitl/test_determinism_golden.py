@@ -188,23 +188,23 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
         "f7b37bdc81915d86e6301d2b85781888c17454aff12c2ee7c6aa32d85331d525",
-        "efab30fdb9430e6a57c40b31f18b85a7c4c7f598d13b80b0de9aff6ff0a49373",
+        "8df34c6eb356ce263b00bbc61a95f4821c4d259a382709b2fc01049095b68e98",
     ),
     "manual_and_rtl": (
         "389314d3db46a32969c24089115e46446107f84b312cab52deed6e9296f5432e",
-        "dfc0127caac19d4d9b38cd87ee690509676fde0f8065945286e56dcea7a23a17",
+        "8ddefffa531b7b54432b505da8da8b31e57139b9e81c8ae26ee49ed3841284bd",
     ),
     "datalink_loss": (
         "463868affe503904b6647aec65cdf733c6b95a1155bcda40bc5c258dd93df000",
-        "ff4898f6792fbcd984e2d98f01a426d6b5be6a9ed7dfc5aeed77b88c0382b96b",
+        "79521d72b37d5597649b604c9057f584d6799be39a3618dc5ce6cf9e9ed81982",
     ),
     "crash": (
         "403f652ee5bdbc02ccee5520de128ba810499772340d261350efe081dd3a0277",
-        "df3f32f73ba5921f4abab5f41022e0698642694272a1148a0969b969280e7215",
+        "d95db51d9b8523a9a913fa265d5f790b32164711ecb84bd4c5c945e271beca44",
     ),
     "params_and_commands": (
-        "30cf4c93dcf2f080f7984e223366d54b9cb0f42b48abf1bce46244ee2eacbda6",
-        "aa0855820179061c6f85069bdde9787fbd67146ab78926a171e83dcfabab61e5",
+        "0d511b8193e9c9d7d57eb2c25e2b3b7c568094ef12c602cf078e3557cc2ed1c6",
+        "e518a5b281d635d98ee9f930d2adaa49ead76c43a204e041728b351fbd724166",
     ),
 }
 

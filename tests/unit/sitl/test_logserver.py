@@ -74,3 +74,30 @@ def test_an_unknown_log_is_ignored_and_log_request_end_stops_the_stream(tmp_path
     assert s.handle(Msg("LOG_REQUEST_END")) == []
     assert not s.streaming and s.next_batch() == []
     assert s.handle(Msg("HEARTBEAT")) is None  # not the log protocol: the vehicle's
+
+
+def test_the_log_list_is_the_log_folder_with_real_dates(tmp_path):
+    """As PX4's log handler: every finished log in the folder (earlier runs, PX4's dated
+    subfolders), oldest first, LOG_ENTRY.time_utc the log's date; a .part is not listed."""
+    import os
+    from datetime import UTC, datetime
+
+    from uavtest.sitl.logserver import LogServer, log_folder
+    from uavtest.sitl.mav import Msg
+
+    px4 = tmp_path / "2025-03-04" / "10_20_30.ulg"
+    px4.parent.mkdir()
+    px4.write_bytes(b"U" * 10)
+    earlier = tmp_path / "seed1-1.ulg"
+    earlier.write_bytes(b"U" * 20)
+    os.utime(earlier, (1_763_000_000, 1_763_000_000))
+    (tmp_path / "seed2-1.ulg.part").write_bytes(b"U")
+    entries = LogServer(log_folder(tmp_path)).handle(Msg("LOG_REQUEST_LIST", {"start": 0, "end": 0xFFFF}))
+    assert [(e.fields["id"], e.fields["size"], e.fields["num_logs"]) for e in entries] == [
+        (0, 10, 2),
+        (1, 20, 2),
+    ]
+    assert entries[0].fields["time_utc"] == int(datetime(2025, 3, 4, 10, 20, 30, tzinfo=UTC).timestamp())
+    assert entries[1].fields["time_utc"] == 1_763_000_000
+    empty = LogServer(log_folder(tmp_path / "absent")).handle(Msg("LOG_REQUEST_LIST", {"start": 0, "end": 9}))
+    assert empty[0].fields["num_logs"] == 0

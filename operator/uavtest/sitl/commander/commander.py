@@ -39,6 +39,21 @@ __all__ = ["READY_US", "Commander"]
 
 READY_US = 1_500_000  # estimator converged, home set
 
+#: The nav states the built-in vehicle flies: a mode change to any other is answered
+#: UNSUPPORTED with a STATUSTEXT (``vehicle_command.unsupported``). Extend it with a new mode.
+FLOWN_NAV_STATES: set[NavState] = {
+    NavState.MANUAL,
+    NavState.STAB,
+    NavState.ACRO,
+    NavState.ALTCTL,
+    NavState.POSCTL,
+    NavState.AUTO_MISSION,
+    NavState.AUTO_LOITER,
+    NavState.AUTO_RTL,
+    NavState.AUTO_TAKEOFF,
+    NavState.AUTO_LAND,
+}
+
 
 class Commander:
     def __init__(self, v: Vehicle) -> None:

@@ -3,7 +3,10 @@
 Like PX4's ``Commander::handle_command``: the command is logged as ``vehicle_command``, its
 handler (``HANDLERS``, keyed by MAV_CMD) returns the MAV_RESULT, the result is logged as
 ``vehicle_command_ack`` and sent back as COMMAND_ACK (with any message the command asked for).
-Commands without a handler are UNSUPPORTED.
+Commands without a handler are not modelled by the built-in simulator: they are answered
+MAV_RESULT_UNSUPPORTED with a STATUSTEXT naming them (``unsupported``), never DENIED (DENIED means
+the vehicle refused). Mode changes to a nav state the simulator does not fly go the same way
+(``commander.FLOWN_NAV_STATES`` is the one table of flown modes).
 """
 
 from __future__ import annotations
@@ -15,7 +18,9 @@ from typing import TYPE_CHECKING
 from uavtest.px4.modes import NavState, nav_state_from_custom_mode
 from uavtest.sitl import mav
 from uavtest.sitl.commander.arming import Reason
+from uavtest.sitl.commander.commander import FLOWN_NAV_STATES
 from uavtest.sitl.mav import MavCmd, MavResult, MavSeverity, Msg
+from uavtest.sitl.mavlink_io import command_name, custom_mode_name
 from uavtest.sitl.mavlink_streams import STREAMS, autopilot_version
 from uavtest.sitl.telemetry import MESSAGE_IDS
 from uavtest.sitl.uorb import VehicleCommand, VehicleCommandAck, command
@@ -29,6 +34,15 @@ __all__ = ["HANDLERS", "Handler", "handle_command"]
 Handler = Callable[["Vehicle", VehicleCommand, list[Msg]], MavResult]
 
 _AUTOPILOT_VERSION = 148
+_GET_MESSAGE_INTERVAL = 510  # MAV_CMD_GET_MESSAGE_INTERVAL
+
+
+def unsupported(v: Vehicle, what: str) -> MavResult:
+    """What the built-in vehicle does not model: a STATUSTEXT naming it, and UNSUPPORTED."""
+    v.text(MavSeverity.WARNING, f"{what} not supported by the built-in simulator")
+    return MavResult.UNSUPPORTED
+
+
 _HOME_POSITION = 242
 _INT32_MAX = 2**31 - 1
 #: VEHICLE_CMD_RESULT_CANCELLED (PX4 msg/VehicleCommandAck.msg; MAVLink MAV_RESULT_CANCELLED,
@@ -50,7 +64,11 @@ def _arm_disarm(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
 
 def _set_mode(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
     if int(c.param1) & 1:
-        return v.commander.set_mode(nav_state_from_custom_mode(int(c.param2), int(c.param3)))
+        main, sub = int(c.param2), int(c.param3)
+        ns = nav_state_from_custom_mode(main, sub)
+        if ns is None or ns not in FLOWN_NAV_STATES:
+            return unsupported(v, f"Mode {custom_mode_name(main, sub)}")
+        return v.commander.set_mode(ns)
     return MavResult.DENIED
 
 
@@ -172,7 +190,17 @@ def _condition_yaw(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult
 
 
 def _message_interval(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
-    v.schedule.set_interval(int(c.param1), int(c.param2), v.time_us)
+    """mavlink_receiver.cpp: on the link the command came from; FAILED for HEARTBEAT and for
+    messages not streamed."""
+    if v.schedule.set_interval(round(c.param1), c.param2, v.time_us):
+        return MavResult.ACCEPTED
+    return MavResult.FAILED
+
+
+def _get_message_interval(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
+    """mavlink_receiver.cpp ``get_message_interval``: MESSAGE_INTERVAL of this link (0: not streamed)."""
+    mid = round(c.param1)
+    extra.append(Msg("MESSAGE_INTERVAL", {"message_id": mid, "interval_us": v.schedule.interval(mid)}))
     return MavResult.ACCEPTED
 
 
@@ -207,6 +235,7 @@ HANDLERS: dict[int, Handler] = {
     MavCmd.DO_LAND_START: _land_start,
     MavCmd.CONDITION_YAW: _condition_yaw,
     MavCmd.SET_MESSAGE_INTERVAL: _message_interval,
+    _GET_MESSAGE_INTERVAL: _get_message_interval,
     MavCmd.REQUEST_MESSAGE: _request_message,
     MavCmd.REQUEST_AUTOPILOT_CAPABILITIES: _request_capabilities,
 }
@@ -244,7 +273,7 @@ def handle_command(v: Vehicle, msg: Msg) -> list[Msg]:
     v.recorder.data(c)
     extra: list[Msg] = []
     handler = HANDLERS.get(c.command)
-    result = MavResult.UNSUPPORTED if handler is None else handler(v, c, extra)
+    result = unsupported(v, command_name(c.command)) if handler is None else handler(v, c, extra)
     v.recorder.data(VehicleCommandAck(t, c.command, int(result), 0, 0, msg.sysid, msg.compid, True))
     v.drain_nav_events()
     ack = Msg(
