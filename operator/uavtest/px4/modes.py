@@ -98,6 +98,8 @@ NAV_STATE_OF_MODE: dict[tuple[int, int], NavState] = {
 MODE_OF_NAV_STATE: dict[NavState, tuple[int, int]] = {v: k for k, v in NAV_STATE_OF_MODE.items()}
 MODE_OF_NAV_STATE[NavState.DESCEND] = (MainMode.AUTO, AutoSubMode.LAND)
 MODE_OF_NAV_STATE[NavState.TERMINATION] = (MainMode.MANUAL, 0)
+#: px4_custom_mode.h: NAVIGATION_STATE_ORBIT reports POSCTL / PX4_CUSTOM_SUB_MODE_POSCTL_ORBIT (1)
+MODE_OF_NAV_STATE[NavState.ORBIT] = (MainMode.POSCTL, 1)
 
 MANUAL_NAV_STATES = frozenset(
     {NavState.MANUAL, NavState.STAB, NavState.ACRO, NavState.ALTCTL, NavState.POSCTL}

@@ -422,6 +422,29 @@ def autopilot_version(v: Vehicle) -> Msg:
     )
 
 
+def orbit_execution_status(v: Vehicle, t: int) -> Msg:
+    """ORBIT_EXECUTION_STATUS from the Orbit task's orbit_status (streams/ORBIT_EXECUTION_STATUS.hpp):
+    radius signed by direction, frame MAV_FRAME_GLOBAL, centre lat/lon 1e7, altitude AMSL. Sent
+    only in nav state ORBIT (PX4 publishes orbit_status only while the task runs), at
+    ``ORBIT_STATUS_HZ``."""
+    o = v.nav.orbit.status()
+    lat, lon = v.proj.reproject(o.x, o.y)
+    return Msg(
+        "ORBIT_EXECUTION_STATUS",
+        {
+            "time_usec": t,
+            "radius": o.radius,
+            "frame": 0,
+            "x": round(lat * 1e7),
+            "y": round(lon * 1e7),
+            "z": v.home_alt - o.z,
+        },
+    )
+
+
+#: ORBIT_EXECUTION_STATUS rate: mavlink_main.cpp "normal" mode (the GCS link) configures 2 Hz
+ORBIT_STATUS_HZ = 2.0
+
 #: message name → builder
 STREAMS: dict[str, Callable[[Vehicle, int], Msg]] = {
     "LOCAL_POSITION_NED": local_position_ned,

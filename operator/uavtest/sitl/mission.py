@@ -38,6 +38,7 @@ NAV_COMMANDS = frozenset(
 SUPPORTED_COMMANDS = NAV_COMMANDS | {
     MavCmd.NAV_RETURN_TO_LAUNCH,
     MavCmd.DO_CHANGE_SPEED,
+    MavCmd.DO_LAND_START,  # a marker: DO_LAND_START jumps here (navigator: skipped when flown)
     MavCmd.SET_CAMERA_MODE,
     203,  # DO_DIGICAM_CONTROL
     206,  # DO_SET_CAM_TRIGG_DIST

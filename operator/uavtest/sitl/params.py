@@ -84,6 +84,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "MPC_YAWRAUTO_ACC": (FLOAT, 60.0),
     "MPC_XY_ERR_MAX": (FLOAT, 2.0),
     "MPC_HOLD_DZ": (FLOAT, 0.1),
+    "MC_ORBIT_RAD_MAX": (FLOAT, 1000.0),
     # land detector
     "LNDMC_TRIG_TIME": (FLOAT, 1.0),
     "LNDMC_Z_VEL_MAX": (FLOAT, 0.25),

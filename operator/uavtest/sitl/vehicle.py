@@ -40,7 +40,7 @@ from uavtest.sitl.geo import Projection
 from uavtest.sitl.land_detector import LandDetector
 from uavtest.sitl.mav import LandedState, MavSeverity, Msg, ParamType
 from uavtest.sitl.mavlink_io import custom_mode_name
-from uavtest.sitl.mavlink_streams import STREAMS, SW_VERSION
+from uavtest.sitl.mavlink_streams import ORBIT_STATUS_HZ, STREAMS, SW_VERSION, orbit_execution_status
 from uavtest.sitl.mc_pos_control import IDLE, Controller, Goal, GoalKind, Limits
 from uavtest.sitl.mission import NavItem
 from uavtest.sitl.navigator import EventKind, Navigator, State
@@ -59,6 +59,8 @@ STEP_US = 4_000  # 250 Hz physics
 CONTROL_EVERY = 5  # 50 Hz control
 CONTROL_DT = STEP_US * CONTROL_EVERY / 1e6
 
+_ORBIT_STATUS_EVERY = round(50 / ORBIT_STATUS_HZ) * CONTROL_EVERY  # physics ticks
+_ORBIT = NavState.ORBIT  # a module constant: enum attribute lookups cost in the 50 Hz tick
 _NEEDS_FIX = frozenset({"GLOBAL_POSITION_INT", "HOME_POSITION"})  # PX4 sends them once it has a fix
 _SETPOINT_TYPE = {
     GoalKind.POSITION: topics.SETPOINT_TYPE_POSITION,
@@ -265,7 +267,7 @@ class Vehicle:
         replies = self.mission_proto.handle(msg, self.time_us, self.nav.current)
         if replies is not None:
             if self.mission_proto.installed is not None:
-                self.nav.set_mission(self.mission_proto.installed)
+                self.nav.set_mission(self.mission_proto.installed, self.time_us / 1e6)
                 self.mission_proto.installed = None
                 self.drain_nav_events()
                 self._log_mission_result()
@@ -338,7 +340,7 @@ class Vehicle:
         return []
 
     def _on_mission_set_current(self, msg: Msg) -> list[Msg]:
-        self.nav.set_current(int(msg.get("seq", 0)))
+        self.nav.set_current(int(msg.get("seq", 0)), self.time_us / 1e6)
         self.drain_nav_events()
         return []
 
@@ -392,6 +394,8 @@ class Vehicle:
             self.ctrl.reset(st.x, st.y, st.z, 0.0, 0.0, 0.0, st.yaw)
         self.drain_nav_events()
         self._stream(t)
+        if commander.nav_state is _ORBIT and self._tick % _ORBIT_STATUS_EVERY == 0:
+            self._out.append(orbit_execution_status(self, t))  # every link (NORMAL mode's 2 Hz)
         self._log(t)
         if commander.close_log:
             commander.close_log = False
@@ -466,6 +470,11 @@ class Vehicle:
             elif ev.kind is EventKind.TEXT:
                 severity, text = ev.value  # type: ignore[misc]
                 self.text(severity, text)
+            elif ev.kind is EventKind.RTL and self.commander.nav_state == NavState.AUTO_MISSION:
+                self.recorder.data(
+                    topics.command(t, int(mav.MavCmd.NAV_RETURN_TO_LAUNCH), (0.0,) * 7, (1, 1), (1, 1), False)
+                )
+                self.commander.set_mode(NavState.AUTO_RTL)
             elif ev.kind is EventKind.HOLD and self.commander.nav_state == NavState.AUTO_TAKEOFF:
                 self.commander.user_nav_state = NavState.AUTO_LOITER
                 self.commander.switch(NavState.AUTO_LOITER, t, hold_z=float(ev.value))  # type: ignore[arg-type]

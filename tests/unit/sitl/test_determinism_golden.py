@@ -189,24 +189,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "131097fc6ff3c722eb1f53f13cb2e112643ea62a4d60b4271f1b12a051af4582",
+        "b3d0b9ff09319fc071cc6628da3cea0422eda9aac46c1a229944099327972b4e",
         "8df34c6eb356ce263b00bbc61a95f4821c4d259a382709b2fc01049095b68e98",
     ),
     "manual_and_rtl": (
-        "4d6f154445f5e522c1fc29aa1bc72b5821c17001aa4698fe7d80fa95acd6956d",
+        "d3adf8c72848aef811e4941de1028bbfbd329c1386e32b4126e9f07a4fa4149c",
         "8ddefffa531b7b54432b505da8da8b31e57139b9e81c8ae26ee49ed3841284bd",
     ),
     "datalink_loss": (
-        "8bee8edc059ffb3387fad4530d37bb2ef17218918bf4dd594fabcecd64fcfed8",
+        "42922fffecdf2e4a5b7764c3ff73438c1d58697b9585b0120eedeb36921516f8",
         "79521d72b37d5597649b604c9057f584d6799be39a3618dc5ce6cf9e9ed81982",
     ),
     "crash": (
-        "b3b3c03417b49a78150fc13949fdec31f271a4731bb98cab8f046514285fa77d",
+        "4813cf0a1a53362b07ba5d6a246ee8afa3a31d99123b37b237c96843318f6830",
         "d95db51d9b8523a9a913fa265d5f790b32164711ecb84bd4c5c945e271beca44",
     ),
     "params_and_commands": (
-        "cacb4b9b14a139708e9b86e7de9b106e0438cdbe9bdf19a573760287791a939c",
-        "4a17aa959370f1049b575d56ff23f38cee5ba7744b5b501f799d32414edecfaf",
+        "7c7753314cb67e79aa22126260210452c2a5f2984b2ea4fa3a17a3304b0682ae",
+        "136a727ff4353990c8c3ec2a677bec8dad084ed957633d59e2be90d544a73ff8",
     ),
 }
 

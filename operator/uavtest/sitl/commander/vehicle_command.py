@@ -44,6 +44,10 @@ def unsupported(v: Vehicle, what: str) -> MavResult:
 
 
 _HOME_POSITION = 242
+_INT32_MAX = 2**31 - 1
+#: VEHICLE_CMD_RESULT_CANCELLED (PX4 msg/VehicleCommandAck.msg; MAVLink MAV_RESULT_CANCELLED,
+#: which the installed pymavlink's common dialect lacks, so MavResult does not carry it)
+RESULT_CANCELLED = 6
 
 
 def _arm_disarm(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
@@ -90,9 +94,9 @@ def _return(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
 def _mission_start(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
     if not v.nav.mission:
         return MavResult.DENIED
-    first = int(c.param1)
+    first = int(c.param1) if math.isfinite(c.param1) else 0
     if 0 < first < len(v.nav.mission):
-        v.nav.set_current(first)
+        v.nav.set_current(first, v.time_us / 1e6)
     cmdr = v.commander
     result = MavResult.ACCEPTED
     if not cmdr.armed:
@@ -103,11 +107,90 @@ def _mission_start(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult
 
 
 def _change_speed(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
+    """PX4 navigator_main.cpp VEHICLE_CMD_DO_CHANGE_SPEED: param2 > 0 sets the cruise speed (in
+    mission, hold and return alike), anything else resets it; always ACCEPTED."""
     if c.param2 > 0:
         v.nav.speed = c.param2
-    elif c.param2 == -2:
+    else:
         v.nav.speed = math.nan
     return MavResult.ACCEPTED
+
+
+def _local_z(v: Vehicle, amsl: float) -> float | None:
+    return v.home_alt - amsl if math.isfinite(amsl) else None
+
+
+def _reposition(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
+    """DO_REPOSITION (Commander.cpp: only with MAV_DO_REPOSITION_FLAGS_CHANGE_MODE, else
+    UNSUPPORTED; switches to Hold; navigator_main.cpp moves the hold point only when armed):
+    param1 ground speed (<= 0: cruise), param4 yaw in radians as PX4 v1.15 reads it (NaN: along
+    the way), param5/6 lat/lon (NaN: keep), param7 altitude AMSL (NaN: keep)."""
+    flags = int(c.param2) if math.isfinite(c.param2) else 0
+    if not flags & 1 or flags & ~1:
+        v.text(MavSeverity.WARNING, "Reposition without CHANGE_MODE flag unsupported")
+        return MavResult.UNSUPPORTED
+    cmdr = v.commander
+    if cmdr.crashed:
+        return MavResult.TEMPORARILY_REJECTED
+    result = cmdr.set_mode(NavState.AUTO_LOITER)
+    if result == MavResult.ACCEPTED and cmdr.armed:
+        x = y = None
+        if math.isfinite(c.param5) and math.isfinite(c.param6):
+            x, y = v.proj.project(c.param5, c.param6)
+        speed = c.param1 if math.isfinite(c.param1) and c.param1 > 0 else math.nan
+        z = _local_z(v, c.param7)
+        gx, gy = (v.st.x, v.st.y) if x is None or y is None else (x, y)
+        if v.nav.geofence_allows_position(gx, gy, -(v.st.z if z is None else z)):
+            yaw = c.param4 if math.isfinite(c.param4) else math.nan
+            v.nav.reposition(v.st, x, y, z, yaw, speed)
+        else:  # navigator_main.cpp: the hold stays where it was; commander has ACKed already
+            v.text(MavSeverity.CRITICAL, "Reposition is outside geofence")
+    return result
+
+
+def _orbit(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
+    """DO_ORBIT (Commander.cpp: switch to nav state ORBIT, ACCEPTED; the Orbit flight task takes
+    the parameters, FlightTaskOrbit.cpp): see ``flight_task_orbit``."""
+    cmdr = v.commander
+    if cmdr.crashed:
+        v.text(MavSeverity.CRITICAL, "Orbit command rejected")
+        return MavResult.TEMPORARILY_REJECTED
+    cmdr.user_nav_state = NavState.ORBIT
+    cmdr.failsafe = False
+    cmdr.switch(NavState.ORBIT, v.time_us)
+    x = y = None
+    if math.isfinite(c.param5) and math.isfinite(c.param6):
+        x, y = v.proj.project(c.param5, c.param6)
+    orbit = v.nav.orbit
+    orbit.rad_max = v.params["MC_ORBIT_RAD_MAX"]
+    if not orbit.apply_command(
+        (c.param1, c.param2, c.param3, c.param4, x, y, _local_z(v, c.param7)), v.st.yaw
+    ):
+        v.text(MavSeverity.CRITICAL, "Orbit radius limit exceeded")
+        # PX4 switches to its failsafe flight task; the built-in vehicle holds where it is
+        cmdr.switch(NavState.AUTO_LOITER, v.time_us)
+    return MavResult.ACCEPTED
+
+
+def _land_start(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
+    """DO_LAND_START (navigator_main.cpp): with a DO_LAND_START item in the mission, MISSION_START
+    from it (ACCEPTED); without one, CANCELLED ("planned mission landing not available")."""
+    index = v.nav.land_start_index()
+    if index is None:
+        v.text(MavSeverity.WARNING, "planned mission landing not available")
+        return RESULT_CANCELLED  # type: ignore[return-value]
+    cmdr = v.commander
+    v.nav.set_current(index, v.time_us / 1e6)
+    if cmdr.armed and not v.land.landed:
+        cmdr.set_mode(NavState.AUTO_MISSION)
+    return MavResult.ACCEPTED
+
+
+def _condition_yaw(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
+    """CONDITION_YAW as a command: PX4 v1.15 has no handler for it (Commander.cpp default case:
+    UNSUPPORTED); it only exists there as a mission item."""
+    v.text(MavSeverity.WARNING, "CONDITION_YAW command unsupported (as PX4 v1.15)")
+    return MavResult.UNSUPPORTED
 
 
 def _message_interval(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
@@ -151,6 +234,10 @@ HANDLERS: dict[int, Handler] = {
     MavCmd.NAV_RETURN_TO_LAUNCH: _return,
     MavCmd.MISSION_START: _mission_start,
     MavCmd.DO_CHANGE_SPEED: _change_speed,
+    MavCmd.DO_REPOSITION: _reposition,
+    MavCmd.DO_ORBIT: _orbit,
+    MavCmd.DO_LAND_START: _land_start,
+    MavCmd.CONDITION_YAW: _condition_yaw,
     MavCmd.SET_MESSAGE_INTERVAL: _message_interval,
     _GET_MESSAGE_INTERVAL: _get_message_interval,
     MavCmd.REQUEST_MESSAGE: _request_message,
@@ -163,7 +250,12 @@ def vehicle_command(msg: Msg, t: int) -> VehicleCommand:
     f = msg.fields
     p1, p2, p3, p4 = (float(f.get(k, 0.0)) for k in ("param1", "param2", "param3", "param4"))
     if msg.name == "COMMAND_INT":
-        p5, p6, p7 = int(f.get("x", 0)) / 1e7, int(f.get("y", 0)) / 1e7, float(f.get("z", 0.0))
+        x, y = int(f.get("x", 0)), int(f.get("y", 0))
+        if x == _INT32_MAX and y == _INT32_MAX:  # mavlink_receiver.cpp: "not given" → NaN
+            p5 = p6 = math.nan
+        else:
+            p5, p6 = x / 1e7, y / 1e7
+        p7 = float(f.get("z", 0.0))
     else:
         p5, p6, p7 = float(f.get("param5", 0.0)), float(f.get("param6", 0.0)), float(f.get("param7", 0.0))
     return command(

@@ -11,6 +11,9 @@ queues events (mission item reached, mission finished, status texts). PX4 behavi
 - a land item first flies to its position at the current altitude (reached then, as PX4
   reports it), then descends; the mission is finished once landed;
 - DO_CHANGE_SPEED sets the cruise speed; camera items are skipped;
+- a mission RTL item is issued as vehicle_command NAV_RETURN_TO_LAUNCH (commander → Return);
+- DO_REPOSITION moves the hold point (``reposition``); ORBIT runs ``FlightTaskOrbit``;
+- a new mission or MISSION_SET_CURRENT only changes what is flown in mission mode;
 - return: climb to ``RTL_RETURN_ALT`` (unless within ``RTL_MIN_DIST``), fly home, descend to
   ``RTL_DESCEND_ALT``, wait ``RTL_LAND_DELAY`` (negative: forever), land;
 - return destination (``RTL_TYPE`` 0, ``rtl.cpp`` findRtlDestination): home or the closest rally
@@ -30,6 +33,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 
 from uavtest.px4.modes import NavState
+from uavtest.sitl.flight_task_orbit import FlightTaskOrbit
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.mav import MavCmd, MavSeverity
 from uavtest.sitl.mc_pos_control import Goal, GoalKind, wrap_pi
@@ -51,6 +55,7 @@ class EventKind(Enum):
     FINISHED = "finished"
     TEXT = "text"  # value: (severity, text)
     HOLD = "hold"  # the navigator asks the commander to switch to hold (after takeoff)
+    RTL = "rtl"  # a mission RTL item: vehicle_command NAV_RETURN_TO_LAUNCH (commander → Return)
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,6 +104,7 @@ class _Step:
     y: float = 0.0
     z: float = 0.0
     yaw: float = math.nan
+    speed: float = math.nan  # a reposition's ground speed (nan: the navigator's cruise speed)
     rtl: _Rtl | None = None
     extra: dict[str, float] = field(default_factory=dict)
 
@@ -124,6 +130,8 @@ class Navigator:
         self.geofence = Geofence(projection)
         self.rally: list[tuple[float, float]] = []  # rally points, local x, y
         self.mission_feasible = True  # the mission passes the geofence
+        # PX4 runs Orbit as a flight task; here the navigator hands its goal to the controller
+        self.orbit = FlightTaskOrbit(params["MC_ORBIT_RAD_MAX"])
 
     @property
     def mission_valid(self) -> bool:
@@ -132,12 +140,16 @@ class Navigator:
 
     # ------------------------------------------------------------------ configuration
 
-    def set_mission(self, items: list[NavItem]) -> None:
+    def set_mission(self, items: list[NavItem], now: float = 0.0) -> None:
+        """A new mission. Only a vehicle flying the mission starts it over (PX4
+        ``MissionBase::onMissionUpdate``: ``set_mission_items`` only ``if (isActive())``); in hold,
+        return or takeoff the vehicle keeps doing what it does."""
         self.mission = list(items)
         self.current = 0
         self.reached = -1
         self.finished = False
-        self._step = _Step()
+        if self.nav_state == NavState.AUTO_MISSION:
+            self._step = _Step(since=now)
         self.events.append(Event(EventKind.CURRENT, 0))
         self.check_mission_feasible()
 
@@ -196,11 +208,40 @@ class Navigator:
         gf.check(st.x, st.y, -st.z, (hx, hy, -hz), max_hor, max_ver)
         return GeofenceResult(t_us, gf.max_dist, gf.max_alt, gf.custom, action)
 
-    def set_current(self, seq: int) -> None:
-        self.current = max(0, min(seq, max(len(self.mission) - 1, 0)))
+    def set_current(self, seq: int, now: float = 0.0) -> bool:
+        """MISSION_SET_CURRENT / MISSION_START param1: jump to ``seq`` (flown at once in mission
+        mode, else when the mission starts); False when there is no such item."""
+        if not 0 <= seq < len(self.mission):
+            return False
+        self.current = seq
         self.finished = False
-        self._step = _Step()
+        if self.nav_state == NavState.AUTO_MISSION:
+            self._step = _Step(since=now)
         self.events.append(Event(EventKind.CURRENT, self.current))
+        return True
+
+    def land_start_index(self) -> int | None:
+        """The mission's DO_LAND_START item (PX4 ``MissionBase::get_land_start_index``)."""
+        for item in self.mission:
+            if item.command == MavCmd.DO_LAND_START:
+                return item.seq
+        return None
+
+    def reposition(
+        self, st: State, x: float | None, y: float | None, z: float | None, yaw: float, speed: float
+    ) -> None:
+        """DO_REPOSITION in hold (PX4 ``Navigator::run`` VEHICLE_CMD_DO_REPOSITION): fly to x, y
+        (None: keep the hold point) at z (None: the current altitude), facing ``yaw`` (radians,
+        nan: along the way), at ``speed`` (nan: cruise). All None and nan: stop where it is."""
+        s = self._step
+        if x is None or y is None:
+            if z is None and math.isnan(yaw):
+                s.x, s.y = st.x, st.y
+        else:
+            s.x, s.y = x, y
+        s.z = st.z if z is None else z
+        s.yaw = yaw
+        s.speed = speed
 
     def enter(
         self,
@@ -221,6 +262,8 @@ class Navigator:
             self._step.rtl = self._rtl_start(st, now)
         elif nav_state == NavState.AUTO_MISSION and self.finished:
             self._step.phase = Phase.DONE
+        elif nav_state == NavState.ORBIT:
+            self.orbit.activate(st.x, st.y, st.z, st.yaw)
 
     # ------------------------------------------------------------------ the tick
 
@@ -237,11 +280,17 @@ class Navigator:
         if ns == NavState.AUTO_LAND:
             return self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
         if ns == NavState.AUTO_RTL:
-            assert s.rtl is not None
+            if s.rtl is None:
+                s.rtl = self._rtl_start(st, now)
             return self._rtl(s.rtl, st, now)
         if st.landed:
             return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
-        return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)  # hold
+        if ns == NavState.ORBIT:
+            return self.orbit.update(st.x, st.y, st.z, st.yaw, self.params["NAV_MC_ALT_RAD"], self._goal)
+        g = self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)  # hold
+        if s.speed == s.speed:
+            g.speed = s.speed
+        return g
 
     def _goal_set(self, kind: GoalKind, x: float, y: float, z: float, yaw: float = math.nan) -> Goal:
         g = self._goal
@@ -304,9 +353,12 @@ class Navigator:
                 self._advance(st, now)
                 return self._mission(st, now)
             if cmd == MavCmd.NAV_RETURN_TO_LAUNCH:
-                s.rtl = self._rtl_start(st, now)
-                s.phase = Phase.FLY
-            elif cmd not in (
+                # PX4 MissionBlock::issue_command: the item becomes vehicle_command
+                # NAV_RETURN_TO_LAUNCH, so commander switches to Return (mission_block.cpp)
+                self.events.append(Event(EventKind.RTL, self.current))
+                self._advance(st, now)
+                return self._mission(st, now)
+            if cmd not in (
                 MavCmd.NAV_WAYPOINT,
                 MavCmd.NAV_LOITER_TIME,
                 MavCmd.NAV_LOITER_UNLIM,
@@ -332,11 +384,6 @@ class Navigator:
                     s.phase = Phase.TAKEOFF
                 else:
                     s.phase = Phase.FLY
-        if s.rtl is not None:
-            goal = self._rtl(s.rtl, st, now)
-            if s.rtl.phase == "done":
-                self._advance(st, now, report=False)
-            return goal
         if s.phase == Phase.TAKEOFF:
             if "after_takeoff" in s.extra:  # implicit takeoff before the first waypoint
                 target_z = -max(-s.z, p["MIS_TAKEOFF_ALT"])
@@ -457,9 +504,6 @@ class Navigator:
         if r.phase == "land":
             if st.landed:
                 r.phase = "done"
-                if self.nav_state == NavState.AUTO_MISSION:
-                    self.reached = self.current
-                    self.events.append(Event(EventKind.REACHED, self.current))
             else:
                 return self._goal_set(GoalKind.LAND, hx, hy, st.z, st.yaw)
         return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
