@@ -20,6 +20,7 @@ records as they are.
 
 from __future__ import annotations
 
+import math
 import random
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -33,7 +34,9 @@ from uavtest.px4.modes import (
 )
 from uavtest.sitl import mav
 from uavtest.sitl import uorb as topics
+from uavtest.sitl.battery_simulator import BatterySimulator
 from uavtest.sitl.commander.commander import Commander
+from uavtest.sitl.commander.failure_detector import TUMBLE_RATE, FailureDetector, FailureInjector
 from uavtest.sitl.commander.vehicle_command import handle_command
 from uavtest.sitl.ekf2 import Estimator
 from uavtest.sitl.geo import Projection
@@ -46,6 +49,7 @@ from uavtest.sitl.navigator import EventKind, Navigator, State
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
+from uavtest.sitl.sensor_gps_sim import GpsSimulator
 from uavtest.sitl.simulator_sih import Body, WindModel, World
 from uavtest.sitl.telemetry import Schedule
 from uavtest.sitl.ulog_writer import LOG_LEVEL
@@ -105,6 +109,12 @@ class Vehicle:
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
         self.est = Estimator(random.Random(f"{seed}:estimator"))
+        self.gps = GpsSimulator(random.Random(f"{seed}:gps"))
+        self.battery = BatterySimulator(self.params)
+        self.failure_injector = FailureInjector()
+        self.failure_detector = FailureDetector()
+        self._tumble = 0.0  # roll (rad) of a vehicle tumbling with a motor out
+        self._falling = False  # lost a motor in the air
         land_jitter = variation.uniform(0.0, 0.8)
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
@@ -152,6 +162,14 @@ class Vehicle:
     ready = property(lambda self: self.commander.ready)
     home_set = property(lambda self: self.commander.home_set)
     home = property(lambda self: self.commander.home)
+
+    @property
+    def global_position_valid(self) -> bool:
+        """EKF2's global position (invalid after dead reckoning without GPS for EKF2_NOAID_TOUT)."""
+        return self._global_valid(self.time_us)
+
+    def _global_valid(self, t: int) -> bool:
+        return self.gps.position_valid(t, self.params["EKF2_NOAID_TOUT"])
 
     @property
     def landed(self) -> bool:
@@ -306,12 +324,18 @@ class Vehicle:
         st.x, st.y, st.z = b.x + e.ex, b.y + e.ey, b.z + e.ez
         st.yaw = b.yaw + e.eh
         st.landed = self.land.landed
+        g = self.gps
+        if g.blocked:  # dead reckoning: the horizontal estimate drifts
+            st.x += g.drift_x
+            st.y += g.drift_y
 
     # ------------------------------------------------------------------ 50 Hz
 
     def _control_tick(self, t: int) -> None:
         dt = CONTROL_DT
         self.est.update(dt)
+        if self.gps.blocked:
+            self.gps.dead_reckon(dt)
         self.wind.update(dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:
             self.world.refresh_near(self.body.x, self.body.y)
@@ -330,15 +354,49 @@ class Vehicle:
             self._cmd = IDLE
             b.motors = False
             self.ctrl.reset(st.x, st.y, st.z, 0.0, 0.0, 0.0, st.yaw)
+        if self.failure_injector.esc_blocked:
+            self._motor_out(t, dt)
+        if self._tick % (CONTROL_EVERY * 5) == 0:  # 10 Hz: battery, failure detector
+            self._monitor(t)
         self.drain_nav_events()
         ready = commander.ready
         for name in self.schedule.due(t):
             if ready or name not in _NEEDS_FIX:
+                if name == "GLOBAL_POSITION_INT" and self.gps.blocked and not self._global_valid(t):
+                    continue
                 self._out.append(STREAMS[name](self, t))
         self._log(t)
         if commander.close_log:
             commander.close_log = False
             self.recorder.stop()
+
+    def _motor_out(self, t: int, dt: float) -> None:
+        """A blocked motor (failure injection): a quadrotor cannot hold its attitude; it tumbles and
+        falls (no usable thrust) until it hits the ground, a crash."""
+        if not self.failure_injector.motor_out or not self.commander.armed or self.commander.crashed:
+            return
+        b = self.body
+        if not b.on_ground:
+            self._falling = True
+            self._tumble = min(self._tumble + TUMBLE_RATE * dt, math.pi)
+        elif self._falling:
+            self._falling = False
+            self.commander.ground_impact(t)
+            return
+        self._cmd = IDLE
+        b.motors = False
+
+    def _monitor(self, t: int) -> None:
+        """battery_simulator and the failure detector, at 10 Hz."""
+        c = self.commander
+        if self.battery.enabled:
+            bat = self.battery.update(t, c.armed, self.body)
+            if self._tick % (CONTROL_EVERY * 10) == 0:  # logged at 5 Hz
+                self.recorder.data(bat)
+        if self.failure_detector.update(
+            t, c.armed, self._tumble, self.failure_injector.offline_mask, self.params
+        ):
+            c.status_dirty = True
 
     def _goal_for(self, t: int) -> Goal:
         """The flight task's goal: idle, the manual task of a stick mode, or the navigator's."""
@@ -349,6 +407,9 @@ class Vehicle:
         if t - c.armed_at_us < self.params["COM_SPOOLUP_TIME"] * 1e6 and landed:
             return Goal(GoalKind.IDLE)
         ns = c.nav_state
+        if ns == NavState.DESCEND:  # FlightTaskDescend: level, sinking at MPC_LAND_SPEED, no position
+            lim = self.limits
+            return Goal(GoalKind.ALTITUDE, sticks=(0.0, 0.0, 0.5 - lim.land_speed / (2.0 * lim.z_down), 0.0))
         if ns in MANUAL_NAV_STATES:
             kind = _MANUAL_GOAL.get(ns, GoalKind.ATTITUDE)
             if landed and c.sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2 and kind != GoalKind.ATTITUDE:
@@ -441,9 +502,12 @@ class Vehicle:
         if tick % (CONTROL_EVERY * 5) == 0:  # 10 Hz
             lat, lon = self.proj.reproject(st.x, st.y)
             alt = self.home_alt - st.z
-            rec.data(
-                topics.VehicleGlobalPosition(t, t, lat, lon, alt, alt, 0.3, 0.4, self.home_alt, True, False)
-            )
+            if not self.gps.blocked or self._global_valid(t):  # EKF2 publishes none without one
+                rec.data(
+                    topics.VehicleGlobalPosition(
+                        t, t, lat, lon, alt, alt, 0.3, 0.4, self.home_alt, True, False
+                    )
+                )
             c = self.ctrl
             rec.data(
                 topics.TrajectorySetpoint(
@@ -461,6 +525,7 @@ class Vehicle:
         rec.data(c.status(t))
         rec.data(self.land.topic(t, self.body, c.crashed, self.goal.kind))
         rec.data(topics.ActuatorArmed(t, c.armed, False, c.ready, False, False, False))
+        rec.data(self.failure_detector.topic(t))
 
     def _log_setpoint(self, t: int, g: Goal) -> None:
         kind = _SETPOINT_TYPE.get(g.kind)

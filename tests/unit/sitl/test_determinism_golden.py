@@ -187,24 +187,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "7852a3f65247e56351d6b54a904133e0a65a78b9ec99ca687efce6a7f9279cad",
-        "efab30fdb9430e6a57c40b31f18b85a7c4c7f598d13b80b0de9aff6ff0a49373",
+        "7d0b9301a56ff791c0a682b36bf390b2ee8767ea5fc6fb218484aca7f9cdb150",
+        "0303264b1a21a89513b66ca8aa4508e1a8838c6ce1e149e76c03267d9b252942",
     ),
     "manual_and_rtl": (
-        "ac18e3eb17a464e5d93a6d2ec54f7513c0714be7b43ed845412b2a5f10959edc",
-        "dfc0127caac19d4d9b38cd87ee690509676fde0f8065945286e56dcea7a23a17",
+        "6ce766582279b29c3113ff15e58e6ac600c24352d95a49365aa0bca724c3976b",
+        "bedd2b854dcbafc6d959d12d63e74972192b6d425d26ca9e752f3ef374d6666a",
     ),
     "datalink_loss": (
-        "d0e8bc1ebd17bc14075b6be270092365c8a41873a1c1bd4ff18b0bb1ebfa878b",
-        "ff4898f6792fbcd984e2d98f01a426d6b5be6a9ed7dfc5aeed77b88c0382b96b",
+        "c1cab8105eac463adcf46e017d4d3bdbefcf865d6ba29e6bc91541c4476d7bc7",
+        "925c880fbb1615b5008a38f72b59adb33ae773b8ca7d8560e9640514942cd6a2",
     ),
     "crash": (
-        "b1cd832f5c3d946a53948e40614c83a5c299cb84f4caa2f1e5278a43ecf7c741",
-        "df3f32f73ba5921f4abab5f41022e0698642694272a1148a0969b969280e7215",
+        "f6b11e476122559cff36169aae91a586d3a73fe99922ef44ecbd3083cc76366b",
+        "a2ca122de952c170edbd596ecbf1180f3f2ec52ab98ac58c9b0cb0ccdd7f7997",
     ),
     "params_and_commands": (
-        "18676b70e7bed8ac8f46779bb0d833257c5d8a9643e60f3909407a6f41939ea1",
-        "2870cadfb5f6d1332a92de207f90d1d01c3f69d5b0bf85d484ea5f47d97d632e",
+        "85f69e37e85726573db4bfe8984801d6036036b439f17e5fd74b7415baa88060",
+        "f87e27e0d46d681378779cc3877355e09e2322e5b359f3611c5b3e44c958cbfe",
     ),
 }
 

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 from uavtest.px4.modes import NavState, nav_state_from_custom_mode
 from uavtest.sitl import mav
 from uavtest.sitl.commander.arming import Reason
+from uavtest.sitl.commander.failure_injection import inject_failure
 from uavtest.sitl.mav import MavCmd, MavResult, MavSeverity, Msg
 from uavtest.sitl.mavlink_streams import STREAMS, autopilot_version
 from uavtest.sitl.telemetry import MESSAGE_IDS
@@ -126,6 +127,7 @@ HANDLERS: dict[int, Handler] = {
     MavCmd.SET_MESSAGE_INTERVAL: _message_interval,
     MavCmd.REQUEST_MESSAGE: _request_message,
     MavCmd.REQUEST_AUTOPILOT_CAPABILITIES: _request_capabilities,
+    MavCmd.INJECT_FAILURE: inject_failure,
 }
 
 
