@@ -17,9 +17,9 @@ while the motors work. The throttle is the collective thrust normalised by ``MPC
 The warning level is ``BAT_LOW_THR`` / ``BAT_CRIT_THR`` / ``BAT_EMERGEN_THR`` against the state
 of charge (``Battery::determineWarning``).
 
-PX4 samples at 100 Hz; the built-in vehicle at 10 Hz (filters use the real interval), which
-changes nothing a client can see: the charge falls by at most 0.2 % per sample at the fastest
-drain a test uses.
+PX4 samples at 100 Hz; the built-in vehicle at 5 Hz (the filters use the real interval; the
+topic is logged at PX4's 5 Hz logger rate), which changes nothing a client sees but when a
+threshold is crossed (at most 0.2 s later): the charge falls by 0.2 % per sample at a 100 s drain.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ __all__ = [
     "BatterySimulator",
 ]
 
-INTERVAL_US = 100_000  # 10 Hz
+INTERVAL_US = 200_000  # 5 Hz
 WARNING_NONE, WARNING_LOW, WARNING_CRITICAL, WARNING_EMERGENCY = 0, 1, 2, 3
 _RECOGNITION_V = 2.1  # LITHIUM_BATTERY_RECOGNITION_VOLTAGE
 _FAILURE_UNIT_SYSTEM_BATTERY = 100
@@ -57,19 +57,33 @@ def _alpha(dt: float, tau: float) -> float:
     return dt / (dt + tau)
 
 
+_ALPHA_1S = _alpha(INTERVAL_US / 1e6, 1.0)  # the voltage and throttle filters (1 s)
+
+
 class BatterySimulator:
-    """battery_simulator + lib/battery: ``update`` at 10 Hz returns the new ``battery_status``."""
+    """battery_simulator + lib/battery: ``update`` at 5 Hz; ``status`` is the ``battery_status``."""
 
     __slots__ = (
+        "_crit_thr",
+        "_drain_us",
+        "_emergen_thr",
+        "_hover",
         "_initialised",
         "_last_us",
+        "_load_drop",
+        "_low_thr",
+        "_min_pct",
+        "_n_cells",
+        "_t",
         "_unconnected_us",
+        "_v_charged",
+        "_v_empty",
         "connected",
+        "enabled",
         "force_empty",
         "p",
         "percentage",
         "remaining",
-        "status",
         "throttle_f",
         "voltage",
         "voltage_f",
@@ -89,11 +103,24 @@ class BatterySimulator:
         self._initialised = False
         self._unconnected_us = 0
         self._last_us = 0
-        self.status: BatteryStatus | None = None
+        self._t = -1
+        self.update_params()
 
-    @property
-    def enabled(self) -> bool:
-        return int(self.p["SIM_BAT_ENABLE"]) != 0
+    def update_params(self) -> None:
+        """Read the parameters (PX4: on parameter_update), not at every sample."""
+        p = self.p
+        self.enabled = int(p["SIM_BAT_ENABLE"]) != 0
+        self._drain_us = max(p["SIM_BAT_DRAIN"], 1.0) * 1e6
+        self._min_pct = p["SIM_BAT_MIN_PCT"] / 100.0
+        self._v_empty, self._v_charged = p["BAT1_V_EMPTY"], p["BAT1_V_CHARGED"]
+        self._n_cells = int(p["BAT1_N_CELLS"])
+        self._load_drop = p["BAT1_V_LOAD_DROP"]
+        self._hover = p["MPC_THR_HOVER"]
+        self._low_thr, self._crit_thr, self._emergen_thr = (
+            p["BAT_LOW_THR"],
+            p["BAT_CRIT_THR"],
+            p["BAT_EMERGEN_THR"],
+        )
 
     def inject(self, failure_type: int, instance: int) -> MavResult | None:
         """BatterySimulator::updateCommands for FAILURE_UNIT_SYSTEM_BATTERY (None: not handled)."""
@@ -104,28 +131,35 @@ class BatterySimulator:
         self.force_empty = failure_type == _FAILURE_TYPE_OFF
         return MavResult.ACCEPTED
 
-    def update(self, t: int, armed: bool, body: Body) -> BatteryStatus:
-        p = self.p
-        dt = INTERVAL_US / 1e6
+    def update(self, t: int, armed: bool, body: Body) -> None:
+        """One sample (BatterySimulator::Run + Battery::updateBatteryStatus); ``status`` builds the topic."""
+        if not armed and self._initialised and self.percentage == 1.0 and self.voltage_f == self.voltage:
+            self._t = t  # disarmed and settled (full, filter converged, motors off): nothing changes
+            if self.throttle_f == 0.0:
+                return
+        self._t = t
         if armed:
             if self._last_us:
-                self.percentage -= (t - self._last_us) / (p["SIM_BAT_DRAIN"] * 1e6)
+                self.percentage -= (t - self._last_us) / self._drain_us
             self._last_us = t
         else:
             self.percentage = 1.0
             self._last_us = 0
-        self.percentage = max(self.percentage, p["SIM_BAT_MIN_PCT"] / 100.0)
-        v_empty, v_charged = p["BAT1_V_EMPTY"], p["BAT1_V_CHARGED"]
-        n_cells = int(p["BAT1_N_CELLS"])
-        cell = v_empty + (v_charged - v_empty) * min(max(self.percentage, 0.0), 1.0)
-        if self.force_empty:
+        if self.percentage < self._min_pct:
+            self.percentage = self._min_pct
+        v_empty, v_charged = self._v_empty, self._v_charged
+        n_cells = self._n_cells
+        pct = self.percentage
+        if self.force_empty or pct <= 0.0:
             cell = v_empty
+        else:
+            cell = v_empty + (v_charged - v_empty) * (pct if pct < 1.0 else 1.0)
         self.voltage = vbatt = cell * n_cells
         # Battery::updateBatteryStatus
         if not self._initialised:
             self.voltage_f = vbatt
         else:
-            self.voltage_f += _alpha(dt, 1.0) * (vbatt - self.voltage_f)
+            self.voltage_f += _ALPHA_1S * (vbatt - self.voltage_f)
         connected = self.voltage_f >= _RECOGNITION_V
         if not connected or self._unconnected_us == 0:
             self._unconnected_us = t
@@ -136,29 +170,35 @@ class BatterySimulator:
         throttle = 0.0
         if body.motors:
             fz = GRAVITY - body.az
-            throttle = (
-                math.sqrt(body.ax * body.ax + body.ay * body.ay + fz * fz) / GRAVITY * p["MPC_THR_HOVER"]
-            )
-            throttle = min(throttle, 1.0)
+            throttle = math.sqrt(body.ax * body.ax + body.ay * body.ay + fz * fz) / GRAVITY * self._hover
+            if throttle > 1.0:
+                throttle = 1.0
         if was_initialised:
-            self.throttle_f += _alpha(dt, 1.0) * (throttle - self.throttle_f)
+            self.throttle_f += _ALPHA_1S * (throttle - self.throttle_f)
         else:
             self.throttle_f = throttle
         soc = -1.0
         if n_cells > 0:
-            cell_v = self.voltage_f / n_cells + self.throttle_f * p["BAT1_V_LOAD_DROP"]
+            cell_v = self.voltage_f / n_cells + self.throttle_f * self._load_drop
             soc = (cell_v - v_empty) / (v_charged - v_empty) if v_charged > v_empty else 0.0
-            soc = min(max(soc, 0.0), 1.0)
+            soc = 0.0 if soc < 0.0 else 1.0 if soc > 1.0 else soc
         self.remaining = soc
         if connected and self._initialised:
-            if soc < p["BAT_EMERGEN_THR"]:
+            if soc < self._emergen_thr:
                 self.warning = WARNING_EMERGENCY
-            elif soc < p["BAT_CRIT_THR"]:
+            elif soc < self._crit_thr:
                 self.warning = WARNING_CRITICAL
-            elif soc < p["BAT_LOW_THR"]:
+            elif soc < self._low_thr:
                 self.warning = WARNING_LOW
             else:
                 self.warning = WARNING_NONE
+
+    @property
+    def status(self) -> BatteryStatus | None:
+        """battery_status of the last sample (None before the first): built when read."""
+        if self._t < 0:
+            return None
+        v_empty, v_charged, n_cells, soc = self._v_empty, self._v_charged, self._n_cells, self.remaining
         faults = 0
         if n_cells > 0 and self.voltage > n_cells * v_charged * 1.05:
             faults |= 1 << _FAULT_SPIKES
@@ -166,8 +206,7 @@ class BatterySimulator:
         bat_v = v_empty + (v_charged - v_empty) * soc
         scale = v_charged / bat_v if bat_v > 0 else 1.0
         scale = 1.3 if scale > 1.3 else 1.0 if not scale >= 1.0 else scale
-        self.status = status = BatteryStatus(
-            t, connected, vbatt, self.voltage_f, -1.0, -1.0, 0.0, 0.0, soc, scale, math.nan, math.nan,
-            n_cells, 0, 0, 0, 1, faults, self.warning,
+        return BatteryStatus(
+            self._t, self.connected, self.voltage, self.voltage_f, -1.0, -1.0, 0.0, 0.0, soc, scale,
+            math.nan, math.nan, n_cells, 0, 0, 0, 1, faults, self.warning,
         )  # fmt: skip
-        return status

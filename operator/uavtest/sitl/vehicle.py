@@ -70,6 +70,9 @@ _SETPOINT_TYPE = {
 }
 #: manual nav state → the flight task's goal kind (attitude for the others)
 _MANUAL_GOAL = {NavState.POSCTL: GoalKind.VELOCITY, NavState.ALTCTL: GoalKind.ALTITUDE}
+_DESCEND = NavState.DESCEND
+#: nav states whose flight task is not the navigator's: the stick modes and Descend
+_NOT_NAVIGATOR = frozenset(MANUAL_NAV_STATES) | {_DESCEND}
 
 
 @dataclass(frozen=True)
@@ -112,9 +115,10 @@ class Vehicle:
         self.gps = GpsSimulator(random.Random(f"{seed}:gps"))
         self.battery = BatterySimulator(self.params)
         self.failure_injector = FailureInjector()
+        # NB: CPython 3.11 shares instance-dict keys (fast self.x in the hot loop) only up to 30
+        # attributes: keep Vehicle's attributes under that (group new state in module objects)
         self.failure_detector = FailureDetector()
-        self._tumble = 0.0  # roll (rad) of a vehicle tumbling with a motor out
-        self._falling = False  # lost a motor in the air
+        self.faulty = False  # a failure was injected (the per-tick fault paths run from then on)
         land_jitter = variation.uniform(0.0, 0.8)
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
@@ -324,22 +328,22 @@ class Vehicle:
         st.x, st.y, st.z = b.x + e.ex, b.y + e.ey, b.z + e.ez
         st.yaw = b.yaw + e.eh
         st.landed = self.land.landed
-        g = self.gps
-        if g.blocked:  # dead reckoning: the horizontal estimate drifts
-            st.x += g.drift_x
-            st.y += g.drift_y
 
     # ------------------------------------------------------------------ 50 Hz
 
     def _control_tick(self, t: int) -> None:
         dt = CONTROL_DT
         self.est.update(dt)
-        if self.gps.blocked:
-            self.gps.dead_reckon(dt)
         self.wind.update(dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:
             self.world.refresh_near(self.body.x, self.body.y)
         self._estimate()
+        faulty = self.faulty
+        if faulty and self.gps.blocked:  # dead reckoning: the horizontal estimate drifts
+            g = self.gps
+            g.dead_reckon(dt)
+            self.st.x += g.drift_x
+            self.st.y += g.drift_y
         commander = self.commander
         commander.update(t)
         goal = self._goal_for(t)
@@ -354,15 +358,15 @@ class Vehicle:
             self._cmd = IDLE
             b.motors = False
             self.ctrl.reset(st.x, st.y, st.z, 0.0, 0.0, 0.0, st.yaw)
-        if self.failure_injector.esc_blocked:
+        if faulty and self.failure_injector.esc_blocked:
             self._motor_out(t, dt)
-        if self._tick % (CONTROL_EVERY * 5) == 0:  # 10 Hz: battery, failure detector
+        if self._tick % (CONTROL_EVERY * 10) == 0:  # 5 Hz: battery, failure detector
             self._monitor(t)
         self.drain_nav_events()
         ready = commander.ready
         for name in self.schedule.due(t):
             if ready or name not in _NEEDS_FIX:
-                if name == "GLOBAL_POSITION_INT" and self.gps.blocked and not self._global_valid(t):
+                if faulty and name == "GLOBAL_POSITION_INT" and not self._global_valid(t):
                     continue
                 self._out.append(STREAMS[name](self, t))
         self._log(t)
@@ -373,30 +377,32 @@ class Vehicle:
     def _motor_out(self, t: int, dt: float) -> None:
         """A blocked motor (failure injection): a quadrotor cannot hold its attitude; it tumbles and
         falls (no usable thrust) until it hits the ground, a crash."""
-        if not self.failure_injector.motor_out or not self.commander.armed or self.commander.crashed:
+        fi = self.failure_injector
+        if not fi.motor_out or not self.commander.armed or self.commander.crashed:
             return
         b = self.body
         if not b.on_ground:
-            self._falling = True
-            self._tumble = min(self._tumble + TUMBLE_RATE * dt, math.pi)
-        elif self._falling:
-            self._falling = False
+            fi.falling = True
+            fi.tumble = min(fi.tumble + TUMBLE_RATE * dt, math.pi)
+        elif fi.falling:
+            fi.falling = False
             self.commander.ground_impact(t)
             return
         self._cmd = IDLE
         b.motors = False
 
     def _monitor(self, t: int) -> None:
-        """battery_simulator and the failure detector, at 10 Hz."""
+        """battery_simulator and the failure detector, at 5 Hz."""
         c = self.commander
-        if self.battery.enabled:
-            bat = self.battery.update(t, c.armed, self.body)
-            if self._tick % (CONTROL_EVERY * 10) == 0:  # logged at 5 Hz
-                self.recorder.data(bat)
-        if self.failure_detector.update(
-            t, c.armed, self._tumble, self.failure_injector.offline_mask, self.params
-        ):
+        bat = self.battery
+        if bat.enabled:
+            bat.update(t, c.armed, self.body)
+            if self.recorder.active:  # logged at 5 Hz
+                self.recorder.data(bat.status)
+        fi, fd = self.failure_injector, self.failure_detector
+        if self.faulty and fd.update(t, c.armed, fi.tumble, fi.offline_mask, self.params):
             c.status_dirty = True
+        c.monitor(t)
 
     def _goal_for(self, t: int) -> Goal:
         """The flight task's goal: idle, the manual task of a stick mode, or the navigator's."""
@@ -407,10 +413,12 @@ class Vehicle:
         if t - c.armed_at_us < self.params["COM_SPOOLUP_TIME"] * 1e6 and landed:
             return Goal(GoalKind.IDLE)
         ns = c.nav_state
-        if ns == NavState.DESCEND:  # FlightTaskDescend: level, sinking at MPC_LAND_SPEED, no position
-            lim = self.limits
-            return Goal(GoalKind.ALTITUDE, sticks=(0.0, 0.0, 0.5 - lim.land_speed / (2.0 * lim.z_down), 0.0))
-        if ns in MANUAL_NAV_STATES:
+        if ns in _NOT_NAVIGATOR:
+            if ns is _DESCEND:  # FlightTaskDescend: level, sinking at MPC_LAND_SPEED, no position
+                lim = self.limits
+                return Goal(
+                    GoalKind.ALTITUDE, sticks=(0.0, 0.0, 0.5 - lim.land_speed / (2.0 * lim.z_down), 0.0)
+                )
             kind = _MANUAL_GOAL.get(ns, GoalKind.ATTITUDE)
             if landed and c.sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2 and kind != GoalKind.ATTITUDE:
                 return Goal(GoalKind.IDLE)
@@ -423,6 +431,7 @@ class Vehicle:
         self.param_proto.changed.clear()
         self.limits = Limits.of(self.params)
         self.ctrl.lim = self.limits
+        self.battery.update_params()
 
     # ------------------------------------------------------------------ navigator events
 
@@ -502,7 +511,7 @@ class Vehicle:
         if tick % (CONTROL_EVERY * 5) == 0:  # 10 Hz
             lat, lon = self.proj.reproject(st.x, st.y)
             alt = self.home_alt - st.z
-            if not self.gps.blocked or self._global_valid(t):  # EKF2 publishes none without one
+            if not self.faulty or self._global_valid(t):  # EKF2 publishes none without one
                 rec.data(
                     topics.VehicleGlobalPosition(
                         t, t, lat, lon, alt, alt, 0.3, 0.4, self.home_alt, True, False

@@ -187,24 +187,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "7d0b9301a56ff791c0a682b36bf390b2ee8767ea5fc6fb218484aca7f9cdb150",
-        "0303264b1a21a89513b66ca8aa4508e1a8838c6ce1e149e76c03267d9b252942",
+        "b06c7c6d194fa0ef74ff2b9d5846677ed9ec29b2122d37899d1d181505d6d07b",
+        "815a48e07a125fbab358fa3b3da5ae7f0e75df61ad3a11b2d6e33b8d0876fcb9",
     ),
     "manual_and_rtl": (
-        "6ce766582279b29c3113ff15e58e6ac600c24352d95a49365aa0bca724c3976b",
-        "bedd2b854dcbafc6d959d12d63e74972192b6d425d26ca9e752f3ef374d6666a",
+        "4b5b1db7548fa08f5397aa721ff22d0ce2636319ffcc0427d859c51dfbcc98e8",
+        "98a055557411c1a1c95d191d94b100d10b050f1d0693c36393bc5d91551c7353",
     ),
     "datalink_loss": (
-        "c1cab8105eac463adcf46e017d4d3bdbefcf865d6ba29e6bc91541c4476d7bc7",
-        "925c880fbb1615b5008a38f72b59adb33ae773b8ca7d8560e9640514942cd6a2",
+        "c1050d1f8fa6ec29b23b8ade1d35c32fbbaf5bfdad3f93f8029b03545a2e8a33",
+        "f7ffa4fd87ef36d126177e59fa3e6ec38a01238eef0ff938ffa3fe85075b3e1a",
     ),
     "crash": (
-        "f6b11e476122559cff36169aae91a586d3a73fe99922ef44ecbd3083cc76366b",
-        "a2ca122de952c170edbd596ecbf1180f3f2ec52ab98ac58c9b0cb0ccdd7f7997",
+        "14b11e6f379e029f0bbf80e45b29f142d6178e711d7e431d418109988f634628",
+        "751ce64880586beb9c1f7e4db5034361d9633d138f666414141bbd1bf77c5298",
     ),
     "params_and_commands": (
-        "85f69e37e85726573db4bfe8984801d6036036b439f17e5fd74b7415baa88060",
-        "f87e27e0d46d681378779cc3877355e09e2322e5b359f3611c5b3e44c958cbfe",
+        "8db5bbe2f42591fc88104e41543cf0223919bfe6d6902c685e5ae100ec7b967f",
+        "fcd001860704ddb3cb4fb2a05976c643413babf95f050c89068577a92948bdc1",
     ),
 }
 

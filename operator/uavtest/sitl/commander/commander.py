@@ -175,7 +175,7 @@ class Commander:
 
     def _check_failsafes(self, t: int) -> None:
         """Failsafes in the air (failsafe.cpp ``checkStateAndMode``): data link, manual control,
-        battery, position, failure detector."""
+        position (battery and failure detector: ``monitor``)."""
         p = self.params
         if (
             int(p[DATA_LINK_LOST.action_param]) > 0
@@ -193,11 +193,17 @@ class Commander:
             self.rc_lost = True
             if not self._rc_loss_ignored():
                 self._failsafe(MANUAL_CONTROL_LOST, t)
+        if self.v.faulty:
+            self._check_position(t)
+
+    def monitor(self, t: int) -> None:
+        """Battery and failure-detector failsafes, when those modules have run (5 Hz), in the air."""
+        if not self.armed or self.crashed or self.land.landed:
+            return
         battery = self.v.battery
         if battery.warning > self.battery_warning:  # armed: the warning only rises
             self.battery_warning = battery.warning
             self._battery_failsafe(t)
-        self._check_position(t)
         bits = self.v.failure_detector.status_bits
         if bits != self._fd_bits:
             new, self._fd_bits = bits & ~self._fd_bits, bits
@@ -205,7 +211,7 @@ class Commander:
                 self._attitude_failure(t)
             if new & 128:
                 self.v.text(MavSeverity.CRITICAL, "Motor failure detected")
-                self._act(actuator_failure_action(int(p["COM_ACT_FAIL_ACT"])), t)
+                self._act(actuator_failure_action(int(self.params["COM_ACT_FAIL_ACT"])), t)
 
     def _rc_loss_ignored(self) -> bool:
         """COM_RC_IN_MODE 4, COM_RCL_EXCEPT for the user's mode, or no sticks when armed."""
@@ -235,8 +241,8 @@ class Commander:
         """Mode fallback without a position (failsafe.cpp ``checkModeFallback``): the auto modes
         cannot run → RTL → Land → Descend; position mode → altitude mode (COM_POSCTL_NAVL 0) or
         Land → Descend (1). Cleared (back to the user's mode) when the position is valid again."""
-        p = self.params
         v = self.v
+        p = self.params
         if v.gps.position_valid(t, p["EKF2_NOAID_TOUT"]):
             self._pos_invalid_us = None
             if self.position_fallback:

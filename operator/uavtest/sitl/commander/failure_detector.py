@@ -8,10 +8,10 @@ What a blocked motor does is the simulator's part: PX4 only reports the ESC offl
 (``manipulateEscStatus``); the built-in vehicle also models its physics — a quadrotor that loses
 one of four motors cannot hold its attitude, it tumbles (rolls at ``TUMBLE_RATE``) and falls.
 
-``FailureDetector`` publishes ``failure_detector_status``: ``fd_motor`` and
-``motor_failure_mask`` once an ESC is offline while armed (``FD_ACT_EN``), and ``fd_roll`` /
-``fd_pitch`` when the attitude has exceeded ``FD_FAIL_R`` / ``FD_FAIL_P`` for ``FD_FAIL_R_TTRI``
-/ ``FD_FAIL_P_TTRI``. The commander reacts as failsafe.cpp: ``fd_critical_failure`` disarms
+``FailureDetector`` publishes ``failure_detector_status`` (run at 5 Hz): ``fd_motor`` and
+``motor_failure_mask`` once an ESC is offline while armed (``FD_ACT_EN``), and ``fd_roll`` when
+the roll has exceeded ``FD_FAIL_R`` for ``FD_FAIL_R_TTRI`` (the tumble is a roll; pitch, altitude
+and external failures are not modelled). The commander reacts as failsafe.cpp: ``fd_critical_failure`` disarms
 within ``COM_LKDOWN_TKO`` + ``COM_SPOOLUP_TIME`` of arming, terminates when the flight
 termination circuit breaker ``CBRK_FLIGHTTERM`` is not 121212, else it is a warning;
 ``fd_motor_failure`` takes ``COM_ACT_FAIL_ACT`` (0: warning).
@@ -43,13 +43,15 @@ TUMBLE_RATE = math.radians(360.0)  # rad/s: roll rate of a quad with a motor out
 
 
 class FailureInjector:
-    """Blocked / wrong ESCs (bit i: motor i+1)."""
+    """Blocked / wrong ESCs (bit i: motor i+1), and the tumble they cause (simulator state)."""
 
-    __slots__ = ("esc_blocked", "esc_wrong")
+    __slots__ = ("esc_blocked", "esc_wrong", "falling", "tumble")
 
     def __init__(self) -> None:
         self.esc_blocked = 0
         self.esc_wrong = 0
+        self.tumble = 0.0  # roll (rad) of a vehicle tumbling with a motor out
+        self.falling = False  # lost a motor in the air
 
     def inject(self, failure_type: int, instance: int) -> MavResult | None:
         if failure_type == FAILURE_TYPE_OK:
@@ -89,17 +91,14 @@ class FailureInjector:
 class FailureDetector:
     """failure_detector_status from the attitude and the ESCs, on change (and at 1 Hz by the caller)."""
 
-    __slots__ = ("_roll_since", "fd_motor", "fd_roll", "motor_failure_mask")
+    __slots__ = ("_roll_since", "fd_motor", "fd_roll", "motor_failure_mask", "status_bits")
 
     def __init__(self) -> None:
         self.fd_roll = False
         self.fd_motor = False
         self.motor_failure_mask = 0
         self._roll_since: int | None = None
-
-    @property
-    def status_bits(self) -> int:
-        return (FAILURE_ROLL if self.fd_roll else 0) | (FAILURE_MOTOR if self.fd_motor else 0)
+        self.status_bits = 0  # vehicle_status.failure_detector_status bits
 
     def update(self, t: int, armed: bool, roll: float, esc_offline: int, params) -> bool:
         """Advance; True when a flag changed."""
@@ -118,6 +117,7 @@ class FailureDetector:
         elif not esc_offline:
             self.fd_motor = False
             self.motor_failure_mask = 0
+        self.status_bits = (FAILURE_ROLL if self.fd_roll else 0) | (FAILURE_MOTOR if self.fd_motor else 0)
         return (self.fd_roll, self.fd_motor) != before
 
     def topic(self, t: int) -> FailureDetectorStatus:
