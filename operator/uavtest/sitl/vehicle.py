@@ -34,9 +34,8 @@ from uavtest.px4.modes import (
 )
 from uavtest.sitl import mav
 from uavtest.sitl import uorb as topics
-from uavtest.sitl.battery_simulator import BatterySimulator
 from uavtest.sitl.commander.commander import Commander
-from uavtest.sitl.commander.failure_detector import TUMBLE_RATE, FailureDetector, FailureInjector
+from uavtest.sitl.commander.failure_detector import TUMBLE_RATE
 from uavtest.sitl.commander.vehicle_command import handle_command
 from uavtest.sitl.ekf2 import Estimator
 from uavtest.sitl.geo import Projection
@@ -49,7 +48,7 @@ from uavtest.sitl.navigator import EventKind, Navigator, State
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
-from uavtest.sitl.sensor_gps_sim import GpsSimulator
+from uavtest.sitl.simulation import Simulation
 from uavtest.sitl.simulator_sih import Body, WindModel, World
 from uavtest.sitl.telemetry import Schedule
 from uavtest.sitl.ulog_writer import LOG_LEVEL
@@ -112,13 +111,9 @@ class Vehicle:
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
         self.est = Estimator(random.Random(f"{seed}:estimator"))
-        self.gps = GpsSimulator(random.Random(f"{seed}:gps"))
-        self.battery = BatterySimulator(self.params)
-        self.failure_injector = FailureInjector()
-        # NB: CPython 3.11 shares instance-dict keys (fast self.x in the hot loop) only up to 30
-        # attributes: keep Vehicle's attributes under that (group new state in module objects)
-        self.failure_detector = FailureDetector()
-        self.faulty = False  # a failure was injected (the per-tick fault paths run from then on)
+        # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
+        # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
+        self.sim = Simulation(self.params, seed)
         land_jitter = variation.uniform(0.0, 0.8)
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
@@ -166,6 +161,10 @@ class Vehicle:
     ready = property(lambda self: self.commander.ready)
     home_set = property(lambda self: self.commander.home_set)
     home = property(lambda self: self.commander.home)
+    battery = property(lambda self: self.sim.battery)
+    gps = property(lambda self: self.sim.gps)
+    failure_injector = property(lambda self: self.sim.failure_injector)
+    failure_detector = property(lambda self: self.sim.failure_detector)
 
     @property
     def global_position_valid(self) -> bool:
@@ -173,7 +172,7 @@ class Vehicle:
         return self._global_valid(self.time_us)
 
     def _global_valid(self, t: int) -> bool:
-        return self.gps.position_valid(t, self.params["EKF2_NOAID_TOUT"])
+        return self.sim.gps.position_valid(t, self.params["EKF2_NOAID_TOUT"])
 
     @property
     def landed(self) -> bool:
@@ -338,9 +337,10 @@ class Vehicle:
         if self._tick % (CONTROL_EVERY * 10) == 0:
             self.world.refresh_near(self.body.x, self.body.y)
         self._estimate()
-        faulty = self.faulty
-        if faulty and self.gps.blocked:  # dead reckoning: the horizontal estimate drifts
-            g = self.gps
+        sim = self.sim
+        faulty = sim.faulty
+        if faulty and sim.gps.blocked:  # dead reckoning: the horizontal estimate drifts
+            g = sim.gps
             g.dead_reckon(dt)
             self.st.x += g.drift_x
             self.st.y += g.drift_y
@@ -358,7 +358,7 @@ class Vehicle:
             self._cmd = IDLE
             b.motors = False
             self.ctrl.reset(st.x, st.y, st.z, 0.0, 0.0, 0.0, st.yaw)
-        if faulty and self.failure_injector.esc_blocked:
+        if faulty and sim.failure_injector.esc_blocked:
             self._motor_out(t, dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:  # 5 Hz: battery, failure detector
             self._monitor(t)
@@ -377,7 +377,7 @@ class Vehicle:
     def _motor_out(self, t: int, dt: float) -> None:
         """A blocked motor (failure injection): a quadrotor cannot hold its attitude; it tumbles and
         falls (no usable thrust) until it hits the ground, a crash."""
-        fi = self.failure_injector
+        fi = self.sim.failure_injector
         if not fi.motor_out or not self.commander.armed or self.commander.crashed:
             return
         b = self.body
@@ -394,13 +394,14 @@ class Vehicle:
     def _monitor(self, t: int) -> None:
         """battery_simulator and the failure detector, at 5 Hz."""
         c = self.commander
-        bat = self.battery
+        sim = self.sim
+        bat = sim.battery
         if bat.enabled:
             bat.update(t, c.armed, self.body)
             if self.recorder.active:  # logged at 5 Hz
                 self.recorder.data(bat.status)
-        fi, fd = self.failure_injector, self.failure_detector
-        if self.faulty and fd.update(t, c.armed, fi.tumble, fi.offline_mask, self.params):
+        fi, fd = sim.failure_injector, sim.failure_detector
+        if sim.faulty and fd.update(t, c.armed, fi.tumble, fi.offline_mask, self.params):
             c.status_dirty = True
         c.monitor(t)
 
@@ -431,7 +432,7 @@ class Vehicle:
         self.param_proto.changed.clear()
         self.limits = Limits.of(self.params)
         self.ctrl.lim = self.limits
-        self.battery.update_params()
+        self.sim.battery.update_params()
 
     # ------------------------------------------------------------------ navigator events
 
@@ -511,7 +512,7 @@ class Vehicle:
         if tick % (CONTROL_EVERY * 5) == 0:  # 10 Hz
             lat, lon = self.proj.reproject(st.x, st.y)
             alt = self.home_alt - st.z
-            if not self.faulty or self._global_valid(t):  # EKF2 publishes none without one
+            if not self.sim.faulty or self._global_valid(t):  # EKF2 publishes none without one
                 rec.data(
                     topics.VehicleGlobalPosition(
                         t, t, lat, lon, alt, alt, 0.3, 0.4, self.home_alt, True, False
@@ -534,7 +535,7 @@ class Vehicle:
         rec.data(c.status(t))
         rec.data(self.land.topic(t, self.body, c.crashed, self.goal.kind))
         rec.data(topics.ActuatorArmed(t, c.armed, False, c.ready, False, False, False))
-        rec.data(self.failure_detector.topic(t))
+        rec.data(self.sim.failure_detector.topic(t))
 
     def _log_setpoint(self, t: int, g: Goal) -> None:
         kind = _SETPOINT_TYPE.get(g.kind)

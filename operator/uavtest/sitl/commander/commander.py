@@ -193,7 +193,7 @@ class Commander:
             self.rc_lost = True
             if not self._rc_loss_ignored():
                 self._failsafe(MANUAL_CONTROL_LOST, t)
-        if self.v.faulty:
+        if self.v.sim.faulty:
             self._check_position(t)
 
     def monitor(self, t: int) -> None:

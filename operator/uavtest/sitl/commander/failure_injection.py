@@ -46,7 +46,7 @@ def inject_failure(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult
     if result == MavResult.ACCEPTED:  # PX4_WARN on the console: the log has it, no STATUSTEXT
         v.recorder.text(LOG_LEVEL["warning"], v.time_us, f"CMD_INJECT_FAILURE, {what} (instance {instance})")
         v.commander.status_dirty = True
-        v.faulty = True
+        v.sim.faulty = True
         return result
     _long_text(v, MavSeverity.WARNING, f"failure injection of {what} not supported by the built-in simulator")
     return MavResult.UNSUPPORTED
