@@ -114,9 +114,7 @@ def sys_status(v: Vehicle, t: int) -> Msg:
             "onboard_control_sensors_enabled": mav.SYS_STATUS_SENSORS | mav.SYS_STATUS_PREARM_CHECK,
             "onboard_control_sensors_health": health,
             "load": 100,
-            "voltage_battery": 16200,
-            "current_battery": 1000 if v.armed else 100,
-            "battery_remaining": 100,
+            **_sys_status_battery(v),
             "drop_rate_comm": 0,
             "errors_comm": 0,
             "errors_count1": 0,
@@ -362,7 +360,30 @@ def vfr_hud(v: Vehicle, t: int) -> Msg:
     )
 
 
+def _sys_status_battery(v: Vehicle) -> dict[str, int]:
+    """SYS_STATUS battery fields from battery_status (streams/SYS_STATUS.hpp)."""
+    b = v.battery.status
+    if b is None or not b.connected:
+        return {"voltage_battery": 65535, "current_battery": -1, "battery_remaining": -1}
+    return {
+        "voltage_battery": round(b.voltage_filtered_v * 1000.0),
+        "current_battery": round(b.current_filtered_a * 100.0),
+        "battery_remaining": math.ceil(b.remaining * 100.0),
+    }
+
+
+#: battery_status.warning → MAV_BATTERY_CHARGE_STATE (OK, LOW, CRITICAL, EMERGENCY)
+_CHARGE_STATE = (1, 2, 3, 4)
+
+
 def battery_status(v: Vehicle, t: int) -> Msg:
+    """BATTERY_STATUS from battery_status (streams/BATTERY_STATUS.hpp): the total voltage in the
+    first cell slot (no per-cell voltages), current -1 A (battery_simulator has no sensor)."""
+    b = v.battery.status
+    connected = b is not None and b.connected
+    voltages = [65535] * 10
+    if connected:
+        voltages[0] = round(b.voltage_filtered_v * 1000.0)  # type: ignore[union-attr]
     return Msg(
         "BATTERY_STATUS",
         {
@@ -370,11 +391,16 @@ def battery_status(v: Vehicle, t: int) -> Msg:
             "battery_function": 1,
             "type": 1,
             "temperature": 32767,
-            "voltages": [16200] + [65535] * 9,
-            "current_battery": 1000 if v.armed else 100,
-            "current_consumed": -1,
+            "voltages": voltages,
+            "current_battery": round(b.current_filtered_a * 100.0) if connected else -1,  # type: ignore[union-attr]
+            "current_consumed": round(b.discharged_mah) if connected else -1,  # type: ignore[union-attr]
             "energy_consumed": -1,
-            "battery_remaining": 100,
+            "battery_remaining": round(b.remaining * 100.0) if connected else -1,  # type: ignore[union-attr]
+            "time_remaining": 0,
+            "charge_state": _CHARGE_STATE[b.warning] if connected and b.warning < 4 else 0,  # type: ignore[union-attr]
+            "voltages_ext": [0, 0, 0, 0],
+            "mode": 0,
+            "fault_bitmask": b.faults if connected else 0,  # type: ignore[union-attr]
         },
     )
 
@@ -386,7 +412,7 @@ def gps_raw_int(v: Vehicle, t: int) -> Msg:
         "GPS_RAW_INT",
         {
             "time_usec": t,
-            "fix_type": 3 if v.ready else 0,
+            "fix_type": 3 if v.ready and not v.gps.blocked else 0,
             "lat": round(lat * 1e7),
             "lon": round(lon * 1e7),
             "alt": round((v.home_alt - b.z) * 1000),

@@ -34,6 +34,32 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "COM_OF_LOSS_T": (FLOAT, 1.0),
     "COM_OBL_RC_ACT": (INT, 0),
     "COM_FAIL_ACT_T": (FLOAT, 5.0),
+    "COM_RC_IN_MODE": (INT, 1),
+    "COM_RCL_EXCEPT": (INT, 0),
+    "COM_LOW_BAT_ACT": (INT, 2),
+    "COM_POS_FS_DELAY": (INT, 1),
+    "COM_POSCTL_NAVL": (INT, 0),
+    "COM_LKDOWN_TKO": (FLOAT, 3.0),
+    "COM_ACT_FAIL_ACT": (INT, 0),
+    "CBRK_FLIGHTTERM": (INT, 121212),
+    # failure detector / failure injection
+    "FD_FAIL_R": (INT, 60),
+    "FD_FAIL_R_TTRI": (FLOAT, 0.3),
+    "FD_ACT_EN": (INT, 1),
+    "SYS_FAILURE_EN": (INT, 1),
+    # battery (battery_simulator + lib/battery)
+    "SIM_BAT_ENABLE": (INT, 1),
+    "SIM_BAT_DRAIN": (FLOAT, 60.0),
+    "SIM_BAT_MIN_PCT": (FLOAT, 50.0),
+    "BAT1_N_CELLS": (INT, 4),
+    "BAT1_V_CHARGED": (FLOAT, 4.05),
+    "BAT1_V_EMPTY": (FLOAT, 3.6),
+    "BAT1_V_LOAD_DROP": (FLOAT, 0.1),
+    "BAT_LOW_THR": (FLOAT, 0.15),
+    "BAT_CRIT_THR": (FLOAT, 0.07),
+    "BAT_EMERGEN_THR": (FLOAT, 0.05),
+    # estimator
+    "EKF2_NOAID_TOUT": (INT, 5000000),
     # navigator / mission
     "NAV_ACC_RAD": (FLOAT, 2.0),
     "NAV_MC_ALT_RAD": (FLOAT, 0.8),
@@ -85,6 +111,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "MPC_XY_ERR_MAX": (FLOAT, 2.0),
     "MPC_HOLD_DZ": (FLOAT, 0.1),
     "MC_ORBIT_RAD_MAX": (FLOAT, 1000.0),
+    "MPC_THR_HOVER": (FLOAT, 0.5),
     # land detector
     "LNDMC_TRIG_TIME": (FLOAT, 1.0),
     "LNDMC_Z_VEL_MAX": (FLOAT, 0.25),
@@ -94,18 +121,15 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
 #: PX4 v1.15 SIH parameters held from boot (listed by PARAM_REQUEST_LIST, logged in the ULog's
 #: parameter section) that have no effect in the simulator; values from the PX4 table (SIH value).
 UNMODELLED_AT_BOOT: tuple[str, ...] = (
-    "COM_RC_IN_MODE",
     "COM_ARM_WO_GPS",
     "COM_HOME_EN",
     "COM_FLTMODE1",
-    "COM_LOW_BAT_ACT",
     "NAV_LOITER_RAD",
     "NAV_TRAFF_AVOID",
     "MIS_DIST_1WP",
     "MPC_ACC_HOR_MAX",
     "MPC_TILTMAX_LND",
     "MPC_XY_VEL_D_ACC",
-    "MPC_THR_HOVER",
     "MPC_XY_TRAJ_P",
     "MPC_POS_MODE",
     "MPC_ALT_MODE",
@@ -118,7 +142,6 @@ UNMODELLED_AT_BOOT: tuple[str, ...] = (
     "SDLOG_MODE",
     "SDLOG_PROFILE",
     "EKF2_HGT_REF",
-    "BAT1_N_CELLS",
 )
 
 

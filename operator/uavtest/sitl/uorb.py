@@ -28,6 +28,8 @@ __all__ = [
     "RECORD",
     "TOPICS",
     "ActuatorArmed",
+    "BatteryStatus",
+    "FailureDetectorStatus",
     "GeofenceResult",
     "HomePosition",
     "ManualControlSetpoint",
@@ -379,6 +381,50 @@ class GeofenceResult:
     geofence_max_alt_triggered: bool = ulog("bool")
     geofence_custom_fence_triggered: bool = ulog("bool")
     geofence_action: int = ulog("uint8_t")
+
+
+@topic("battery_status")
+@dataclass(slots=True)
+class BatteryStatus:
+    """msg/BatteryStatus.msg (the fields PX4's battery library fills for battery_simulator)."""
+
+    timestamp: int = ulog("uint64_t")
+    connected: bool = ulog("bool")
+    voltage_v: float = ulog("float")
+    voltage_filtered_v: float = ulog("float")
+    current_a: float = ulog("float")
+    current_filtered_a: float = ulog("float")
+    current_average_a: float = ulog("float")
+    discharged_mah: float = ulog("float")
+    remaining: float = ulog("float")
+    scale: float = ulog("float")
+    time_remaining_s: float = ulog("float")
+    temperature: float = ulog("float")
+    cell_count: int = ulog("uint8_t")
+    source: int = ulog("uint8_t")
+    priority: int = ulog("uint8_t")
+    capacity: int = ulog("uint16_t")
+    id: int = ulog("uint8_t")
+    faults: int = ulog("uint16_t")
+    warning: int = ulog("uint8_t")
+
+
+@topic("failure_detector_status")
+@dataclass(slots=True)
+class FailureDetectorStatus:
+    """msg/FailureDetectorStatus.msg."""
+
+    timestamp: int = ulog("uint64_t")
+    fd_roll: bool = ulog("bool")
+    fd_pitch: bool = ulog("bool")
+    fd_alt: bool = ulog("bool")
+    fd_ext: bool = ulog("bool")
+    fd_arm_escs: bool = ulog("bool")
+    fd_battery: bool = ulog("bool")
+    fd_imbalanced_prop: bool = ulog("bool")
+    fd_motor: bool = ulog("bool")
+    imbalanced_prop_metric: float = ulog("float")
+    motor_failure_mask: int = ulog("uint16_t")
 
 
 #: topics subscribed in every log, in this order (position_setpoint only nests)

@@ -20,6 +20,7 @@ records as they are.
 
 from __future__ import annotations
 
+import math
 import random
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -34,6 +35,7 @@ from uavtest.px4.modes import (
 from uavtest.sitl import mav
 from uavtest.sitl import uorb as topics
 from uavtest.sitl.commander.commander import FLOWN_NAV_STATES, Commander
+from uavtest.sitl.commander.failure_detector import TUMBLE_RATE
 from uavtest.sitl.commander.vehicle_command import handle_command, unsupported
 from uavtest.sitl.ekf2 import Estimator
 from uavtest.sitl.geo import Projection
@@ -48,6 +50,7 @@ from uavtest.sitl.offboard import Offboard
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
+from uavtest.sitl.simulation import Simulation
 from uavtest.sitl.simulator_sih import Body, WindModel, World
 from uavtest.sitl.telemetry import MODES, ONBOARD, Schedule
 from uavtest.sitl.ulog_writer import LOG_LEVEL
@@ -62,6 +65,7 @@ CONTROL_DT = STEP_US * CONTROL_EVERY / 1e6
 _ORBIT_STATUS_EVERY = round(50 / ORBIT_STATUS_HZ) * CONTROL_EVERY  # physics ticks
 _ORBIT = NavState.ORBIT  # a module constant: enum attribute lookups cost in the 50 Hz tick
 _NEEDS_FIX = frozenset({"GLOBAL_POSITION_INT", "HOME_POSITION"})  # PX4 sends them once it has a fix
+_NO_GLOBAL = frozenset({"GLOBAL_POSITION_INT"})  # nor a global position it has lost
 _SETPOINT_TYPE = {
     GoalKind.POSITION: topics.SETPOINT_TYPE_POSITION,
     GoalKind.TAKEOFF: topics.SETPOINT_TYPE_TAKEOFF,
@@ -70,6 +74,9 @@ _SETPOINT_TYPE = {
 }
 #: manual nav state → the flight task's goal kind (attitude for the others)
 _MANUAL_GOAL = {NavState.POSCTL: GoalKind.VELOCITY, NavState.ALTCTL: GoalKind.ALTITUDE}
+_DESCEND = NavState.DESCEND
+#: nav states whose flight task is not the navigator's: the stick modes and Descend
+_NOT_NAVIGATOR = frozenset(MANUAL_NAV_STATES) | {_DESCEND}
 
 
 @dataclass(frozen=True)
@@ -113,6 +120,9 @@ class Vehicle:
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
         self.est = Estimator(random.Random(f"{seed}:estimator"))
+        # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
+        # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
+        self.sim = Simulation(self.params, seed)
         land_jitter = variation.uniform(0.0, 0.8)
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
@@ -166,6 +176,18 @@ class Vehicle:
     ready = property(lambda self: self.commander.ready)
     home_set = property(lambda self: self.commander.home_set)
     home = property(lambda self: self.commander.home)
+    battery = property(lambda self: self.sim.battery)
+    gps = property(lambda self: self.sim.gps)
+    failure_injector = property(lambda self: self.sim.failure_injector)
+    failure_detector = property(lambda self: self.sim.failure_detector)
+
+    @property
+    def global_position_valid(self) -> bool:
+        """EKF2's global position (invalid after dead reckoning without GPS for EKF2_NOAID_TOUT)."""
+        return self._global_valid(self.time_us)
+
+    def _global_valid(self, t: int) -> bool:
+        return self.sim.gps.position_valid(t, self.params["EKF2_NOAID_TOUT"])
 
     @property
     def landed(self) -> bool:
@@ -374,6 +396,13 @@ class Vehicle:
         if self._tick % (CONTROL_EVERY * 10) == 0:
             self.world.refresh_near(self.body.x, self.body.y)
         self._estimate()
+        sim = self.sim
+        faulty = sim.faulty
+        if faulty and sim.gps.blocked:  # dead reckoning: the horizontal estimate drifts
+            g = sim.gps
+            g.dead_reckon(dt)
+            self.st.x += g.drift_x
+            self.st.y += g.drift_y
         commander = self.commander
         commander.update(t)
         goal = self._goal_for(t)
@@ -392,8 +421,12 @@ class Vehicle:
             self._cmd = IDLE
             b.motors = False
             self.ctrl.reset(st.x, st.y, st.z, 0.0, 0.0, 0.0, st.yaw)
+        if faulty and sim.failure_injector.esc_blocked:
+            self._motor_out(t, dt)
+        if self._tick % (CONTROL_EVERY * 10) == 0:  # 5 Hz: battery, failure detector
+            self._monitor(t)
         self.drain_nav_events()
-        self._stream(t)
+        self._stream(t, faulty)
         if commander.nav_state is _ORBIT and self._tick % _ORBIT_STATUS_EVERY == 0:
             self._out.append(orbit_execution_status(self, t))  # every link (NORMAL mode's 2 Hz)
         self._log(t)
@@ -401,24 +434,63 @@ class Vehicle:
             commander.close_log = False
             self.recorder.stop()
 
-    def _stream(self, t: int) -> None:
-        """The telemetry due at ``t`` on each link, each message built once per tick."""
-        ready = self.commander.ready
+    def _stream(self, t: int, faulty: bool) -> None:
+        """The telemetry due at ``t`` on each link, each message built once per tick. Before the
+        fix no GLOBAL_POSITION_INT / HOME_POSITION; no GLOBAL_POSITION_INT either while a failed
+        GPS has left the estimate without a global position."""
+        held = (
+            _NEEDS_FIX
+            if not self.commander.ready
+            else _NO_GLOBAL
+            if faulty and not self._global_valid(t)
+            else ()
+        )
         schedules = self.schedules
         out = self._out
         if len(schedules) == 1:
             for name in schedules[0].due(t):
-                if ready or name not in _NEEDS_FIX:
+                if name not in held:
                     out.append(STREAMS[name](self, t))
             return
         built: dict[str, Msg] = {}
         for i, schedule in enumerate(schedules):
             for name in schedule.due(t):
-                if ready or name not in _NEEDS_FIX:
+                if name not in held:
                     msg = built.get(name)
                     if msg is None:
                         msg = built[name] = STREAMS[name](self, t)
                     out.append((i, msg))
+
+    def _motor_out(self, t: int, dt: float) -> None:
+        """A blocked motor (failure injection): a quadrotor cannot hold its attitude; it tumbles and
+        falls (no usable thrust) until it hits the ground, a crash."""
+        fi = self.sim.failure_injector
+        if not fi.motor_out or not self.commander.armed or self.commander.crashed:
+            return
+        b = self.body
+        if not b.on_ground:
+            fi.falling = True
+            fi.tumble = min(fi.tumble + TUMBLE_RATE * dt, math.pi)
+        elif fi.falling:
+            fi.falling = False
+            self.commander.ground_impact(t)
+            return
+        self._cmd = IDLE
+        b.motors = False
+
+    def _monitor(self, t: int) -> None:
+        """battery_simulator and the failure detector, at 5 Hz."""
+        c = self.commander
+        sim = self.sim
+        bat = sim.battery
+        if bat.enabled:
+            bat.update(t, c.armed, self.body)
+            if self.recorder.active:  # logged at 5 Hz
+                self.recorder.data(bat.status)
+        fi, fd = sim.failure_injector, sim.failure_detector
+        if sim.faulty and fd.update(t, c.armed, fi.tumble, fi.offline_mask, self.params):
+            c.status_dirty = True
+        c.monitor(t)
 
     def _goal_for(self, t: int) -> Goal:
         """The flight task's goal: idle, the manual task of a stick mode, or the navigator's."""
@@ -435,7 +507,12 @@ class Vehicle:
                 self.ctrl.of_ramp = 0.0  # PX4's takeoff ramp restarts from the ground
                 return Goal(GoalKind.IDLE)
             return self.offboard.goal
-        if ns in MANUAL_NAV_STATES:
+        if ns in _NOT_NAVIGATOR:
+            if ns is _DESCEND:  # FlightTaskDescend: level, sinking at MPC_LAND_SPEED, no position
+                lim = self.limits
+                return Goal(
+                    GoalKind.ALTITUDE, sticks=(0.0, 0.0, 0.5 - lim.land_speed / (2.0 * lim.z_down), 0.0)
+                )
             kind = _MANUAL_GOAL.get(ns, GoalKind.ATTITUDE)
             if landed and c.sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2 and kind != GoalKind.ATTITUDE:
                 return Goal(GoalKind.IDLE)
@@ -448,6 +525,7 @@ class Vehicle:
         self.param_proto.changed.clear()
         self.limits = Limits.of(self.params)
         self.ctrl.lim = self.limits
+        self.sim.battery.update_params()
 
     # ------------------------------------------------------------------ navigator events
 
@@ -543,9 +621,12 @@ class Vehicle:
         if tick % (CONTROL_EVERY * 5) == 0:  # 10 Hz
             lat, lon = self.proj.reproject(st.x, st.y)
             alt = self.home_alt - st.z
-            rec.data(
-                topics.VehicleGlobalPosition(t, t, lat, lon, alt, alt, 0.3, 0.4, self.home_alt, True, False)
-            )
+            if not self.sim.faulty or self._global_valid(t):  # EKF2 publishes none without one
+                rec.data(
+                    topics.VehicleGlobalPosition(
+                        t, t, lat, lon, alt, alt, 0.3, 0.4, self.home_alt, True, False
+                    )
+                )
             c = self.ctrl
             rec.data(
                 topics.TrajectorySetpoint(
@@ -563,6 +644,7 @@ class Vehicle:
         rec.data(c.status(t))
         rec.data(self.land.topic(t, self.body, c.crashed, self.goal.kind))
         rec.data(topics.ActuatorArmed(t, c.armed, False, c.ready, False, False, False))
+        rec.data(self.sim.failure_detector.topic(t))
 
     def _log_setpoint(self, t: int, g: Goal) -> None:
         kind = _SETPOINT_TYPE.get(g.kind)

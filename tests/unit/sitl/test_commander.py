@@ -13,8 +13,10 @@ def test_failsafe_actions_switch_to_px4s_nav_states():
         NavAction.HOLD: NavState.AUTO_LOITER,
         NavAction.RETURN: NavState.AUTO_RTL,
         NavAction.LAND: NavState.AUTO_LAND,
+        NavAction.DESCEND: NavState.DESCEND,
     }
     assert NavAction.TERMINATE not in ACTION_NAV_STATE  # termination cuts the motors instead
+    assert NavAction.DISARM not in ACTION_NAV_STATE  # NAV_RCL_ACT 6: disarm (lockdown)
 
 
 def test_first_failing_arming_check_decides():

@@ -189,24 +189,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "b3d0b9ff09319fc071cc6628da3cea0422eda9aac46c1a229944099327972b4e",
-        "8df34c6eb356ce263b00bbc61a95f4821c4d259a382709b2fc01049095b68e98",
+        "2ac4d8b77a4a49b7677b4a08c1eb40d12c073cf5ba6d9930289b805a18d6e8da",
+        "beb8e0ede2a16c1093324a0c39357b1d5ee42daa22ff814584fe8e60fb76a1b1",
     ),
     "manual_and_rtl": (
-        "d3adf8c72848aef811e4941de1028bbfbd329c1386e32b4126e9f07a4fa4149c",
-        "8ddefffa531b7b54432b505da8da8b31e57139b9e81c8ae26ee49ed3841284bd",
+        "f5496a48854a53a5b716412b1e3bfc6c7285b93d73a17106b89adc28fa2c6f12",
+        "d3f42d35da3db1c05a074d11376f6bed32b8409df6644abdd00305178405cfcf",
     ),
     "datalink_loss": (
-        "42922fffecdf2e4a5b7764c3ff73438c1d58697b9585b0120eedeb36921516f8",
-        "79521d72b37d5597649b604c9057f584d6799be39a3618dc5ce6cf9e9ed81982",
+        "50e987d3e1a3111d47f308e7dca2522e7305790d8db2351c7e670f2006af1433",
+        "382d82a89cacd76c9a59f81d18274c09e03a7043b1ab2a767292b88365fbf028",
     ),
     "crash": (
-        "4813cf0a1a53362b07ba5d6a246ee8afa3a31d99123b37b237c96843318f6830",
-        "d95db51d9b8523a9a913fa265d5f790b32164711ecb84bd4c5c945e271beca44",
+        "c99d991cb1e78000ed9c68dfe0546f83dca7d6d9f7bcc8bb3b0278c97eeb7797",
+        "e14d716a5563d41314127c1edfdbcc613b784a3efd9790739850a0b86a69c1e3",
     ),
     "params_and_commands": (
-        "7c7753314cb67e79aa22126260210452c2a5f2984b2ea4fa3a17a3304b0682ae",
-        "136a727ff4353990c8c3ec2a677bec8dad084ed957633d59e2be90d544a73ff8",
+        "4347434072360a02ea39884141f1d1dea22308372980a9bb9a7c1f98edbd4bd3",
+        "46db39636054d617abc624742e6700fd1ad435a3a6c0199366567808501bcbee",
     ),
 }
 

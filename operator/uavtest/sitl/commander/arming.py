@@ -24,7 +24,7 @@ class Reason(IntEnum):
     AUTO_DISARM_LAND = 7
     AUTO_DISARM_PREFLIGHT = 8
     FAILURE_DETECTOR = 11
-    FAILSAFE = 15  # arm_disarm_reason_t::failsafe
+    FAILSAFE = 14  # arm_disarm_reason_t::failsafe (events enums.json)
 
 
 @dataclass(frozen=True, slots=True)

@@ -21,6 +21,7 @@ from uavtest.sitl import mav
 from uavtest.sitl.commander.arming import Reason, arming_denied
 from uavtest.sitl.commander.failsafe import (
     ACTION_NAV_STATE,
+    BATTERY_TEXT,
     DATA_LINK_LOST,
     GEOFENCE_TEXTS,
     GF_ACTION_NAV_STATE,
@@ -28,10 +29,16 @@ from uavtest.sitl.commander.failsafe import (
     MANUAL_CONTROL_LOST,
     NAV_STATE_NAME,
     OFFBOARD_LOSS_NAV_STATE,
+    RC_IN_MODE_DISABLED,
+    RCL_EXCEPT_HOLD,
+    RCL_EXCEPT_MISSION,
+    RCL_EXCEPT_OFFBOARD,
     Condition,
     GeofenceAction,
     NavAction,
     OffboardLossAction,
+    actuator_failure_action,
+    battery_action,
 )
 from uavtest.sitl.land_detector import Transition
 from uavtest.sitl.mav import MavResult, MavSeverity
@@ -96,6 +103,12 @@ class Commander:
         self.sticks = (0.0, 0.0, 0.5, 0.0)
         self._sticks_us: int | None = None
         self._offboard_lost = False  # the offboard-loss fallback is active
+        self.rc_lost = False  # manual_control_signal_lost (after sticks were seen)
+        self._rc_lost_at_arming = True
+        self.battery_warning = 0  # failsafe_flags.battery_warning: only rises while armed
+        self._pos_invalid_us: int | None = None
+        self.position_fallback = False  # in a mode fallback for lack of position
+        self._fd_bits = 0
         self.close_log = False  # the log closes after this tick (disarmed)
         self.status_dirty = True  # vehicle_status changed: log it now, not at the next 1 Hz slot
         self._gf_active = False  # a geofence breach has been acted on (until it clears)
@@ -112,8 +125,14 @@ class Commander:
             self.v.text(MavSeverity.INFO, "Data link regained")
 
     def manual_control(self, t: int, sticks: tuple[float, float, float, float]) -> None:
+        if int(self.params["COM_RC_IN_MODE"]) in (0, RC_IN_MODE_DISABLED):
+            return  # 0: RC transmitter only (MAVLink sticks unused); 4: stick input disabled
         self.sticks = sticks
         self._sticks_us = t
+        self._rc_lost_at_arming = False  # sticks present: the RC-loss failsafe applies again
+        if self.rc_lost:
+            self.rc_lost = False
+            self.v.text(MavSeverity.INFO, "Manual control regained")
 
     def status(self, t: int) -> VehicleStatus:
         land = self.land
@@ -127,7 +146,7 @@ class Commander:
             self.disarming_reason,
             int(self.user_nav_state),
             int(self.nav_state),
-            4 if self.crashed else 0,
+            (4 if self.crashed else 0) | self.v.failure_detector.status_bits,
             0,
             1,
             self.failsafe,
@@ -184,7 +203,8 @@ class Commander:
             self.disarm(t, Reason.AUTO_DISARM_PREFLIGHT, "Disarmed by auto preflight disarming")
 
     def _check_failsafes(self, t: int) -> None:
-        """Failsafes in the air: data link lost, manual control lost."""
+        """Failsafes in the air (failsafe.cpp ``checkStateAndMode``): data link, manual control,
+        position (battery and failure detector: ``monitor``)."""
         p = self.params
         if (
             int(p[DATA_LINK_LOST.action_param]) > 0
@@ -195,13 +215,15 @@ class Commander:
             self.gcs_lost = True
             self._failsafe(DATA_LINK_LOST, t)
         if (
-            self.nav_state in MANUAL_NAV_STATES
+            not self.rc_lost
             and self._sticks_us is not None
             and t - self._sticks_us > max(p["COM_RC_LOSS_T"], 0.1) * 1e6
-            and int(p[MANUAL_CONTROL_LOST.action_param]) > 0
         ):
-            self._sticks_us = None
-            self._failsafe(MANUAL_CONTROL_LOST, t)
+            self.rc_lost = True
+            if not self._rc_loss_ignored():
+                self._failsafe(MANUAL_CONTROL_LOST, t)
+        if self.v.sim.faulty:
+            self._check_position(t)
         self._check_geofence(t)
 
     def _check_geofence(self, t: int) -> None:
@@ -292,21 +314,125 @@ class Commander:
         self.switch(target, t)
         return False
 
+    def monitor(self, t: int) -> None:
+        """Battery and failure-detector failsafes, when those modules have run (5 Hz), in the air."""
+        if not self.armed or self.crashed or self.land.landed:
+            return
+        battery = self.v.battery
+        if battery.warning > self.battery_warning:  # armed: the warning only rises
+            self.battery_warning = battery.warning
+            self._battery_failsafe(t)
+        bits = self.v.failure_detector.status_bits
+        if bits != self._fd_bits:
+            new, self._fd_bits = bits & ~self._fd_bits, bits
+            if new & 1:
+                self._attitude_failure(t)
+            if new & 128:
+                self.v.text(MavSeverity.CRITICAL, "Motor failure detected")
+                self._act(actuator_failure_action(int(self.params["COM_ACT_FAIL_ACT"])), t)
+
+    def _rc_loss_ignored(self) -> bool:
+        """COM_RC_IN_MODE 4, COM_RCL_EXCEPT for the user's mode, or no sticks when armed."""
+        p = self.params
+        if int(p["COM_RC_IN_MODE"]) == RC_IN_MODE_DISABLED or self._rc_lost_at_arming:
+            return True
+        exc = int(p["COM_RCL_EXCEPT"])
+        mode = self.user_nav_state
+        return bool(
+            (mode == NavState.AUTO_MISSION and exc & RCL_EXCEPT_MISSION)
+            or (mode in (NavState.AUTO_LOITER, NavState.AUTO_TAKEOFF) and exc & RCL_EXCEPT_HOLD)
+            or (mode == NavState.OFFBOARD and exc & RCL_EXCEPT_OFFBOARD)
+        )
+
+    def _battery_failsafe(self, t: int) -> None:
+        level = self.battery_warning
+        action = battery_action(int(self.params["COM_LOW_BAT_ACT"]), level)
+        if action == NavAction.WARN:
+            severity, text = BATTERY_TEXT[level]
+            self.v.text(MavSeverity[severity], text)
+            return
+        cause = "Critical battery level" if level == 2 else "Emergency battery level"
+        self.v.text(MavSeverity.CRITICAL, f"{cause}: switching to {action.name.lower()}")
+        self._act(action, t)
+
+    def _check_position(self, t: int) -> None:
+        """Mode fallback without a position (failsafe.cpp ``checkModeFallback``): the auto modes
+        cannot run → RTL → Land → Descend; position mode → altitude mode (COM_POSCTL_NAVL 0) or
+        Land → Descend (1). Cleared (back to the user's mode) when the position is valid again."""
+        v = self.v
+        p = self.params
+        if v.gps.position_valid(t, p["EKF2_NOAID_TOUT"]):
+            self._pos_invalid_us = None
+            if self.position_fallback:
+                self.position_fallback = False
+                self.failsafe = False
+                self.v.text(MavSeverity.INFO, "Position estimate regained")
+                self.switch(self.user_nav_state, t)
+            return
+        if self._pos_invalid_us is None:
+            self._pos_invalid_us = t
+        if self.position_fallback or t - self._pos_invalid_us < p["COM_POS_FS_DELAY"] * 1e6:
+            return
+        mode = self.user_nav_state
+        if mode == NavState.POSCTL and int(p["COM_POSCTL_NAVL"]) == 0:
+            target = NavState.ALTCTL
+        elif mode in (
+            NavState.POSCTL,
+            *ACTION_NAV_STATE.values(),
+            NavState.AUTO_MISSION,
+            NavState.AUTO_TAKEOFF,
+        ):
+            target = NavState.DESCEND
+        else:
+            return
+        if self.nav_state == target:
+            return
+        self.position_fallback = True
+        self.failsafe = True
+        v.text(MavSeverity.CRITICAL, "Position estimate lost")
+        v.text(MavSeverity.WARNING, f"Failsafe activated: {target.name.lower()}")
+        self.switch(target, t)
+
+    def _attitude_failure(self, t: int) -> None:
+        """fd_critical_failure: lockdown early after arming, termination if its breaker allows, else warn."""
+        p = self.params
+        self.v.text(MavSeverity.CRITICAL, "Attitude failure detected")
+        if t < self.armed_at_us + (p["COM_LKDOWN_TKO"] + p["COM_SPOOLUP_TIME"]) * 1e6:
+            self._act(NavAction.DISARM, t)
+        elif int(p["CBRK_FLIGHTTERM"]) != 121212:
+            self._act(NavAction.TERMINATE, t)
+
     def _failsafe(self, condition: Condition, t: int) -> None:
         """Report the condition, then take the action its parameter chooses (``ACTION_NAV_STATE``)."""
         self.v.text(MavSeverity.CRITICAL, condition.text)
-        action = int(self.params[condition.action_param])
+        self._act(int(self.params[condition.action_param]), t)
+
+    def _act(self, action: int, t: int) -> None:
+        if action in (NavAction.DISABLED, NavAction.WARN):
+            return
         self.failsafe = True
         if action == NavAction.TERMINATE:
             self.v.text(MavSeverity.CRITICAL, "Failsafe: flight termination")
             self.body.motors = False
             self.crashed = True
             return
+        if action == NavAction.DISARM:
+            self.disarm(t, Reason.FAILSAFE, "Disarmed by failsafe")
+            return
         target = ACTION_NAV_STATE.get(action)
         if target is not None:
             name = target.name.lower().replace("auto_", "")
             self.v.text(MavSeverity.WARNING, f"Failsafe activated: {name}")
             self.switch(target, t)
+
+    def ground_impact(self, t: int) -> None:
+        """The vehicle fell to the ground out of control (a motor failed): a crash."""
+        self.crashed = True
+        self.failsafe = True
+        self.body.motors = False
+        self.v._cmd = IDLE
+        self.status_dirty = True
+        self.v.text(MavSeverity.CRITICAL, "crash: ground impact")
 
     def set_home(self, t: int) -> None:
         st = self.st
@@ -343,6 +469,7 @@ class Commander:
         rtl_type = int(self.params["RTL_TYPE"])
         if rtl_type != 0:
             self.v.text(MavSeverity.WARNING, f"RTL_TYPE {rtl_type} not modelled: Return flies RTL_TYPE 0")
+        self._rc_lost_at_arming = self._sticks_us is None or self.rc_lost
         self.set_home(t)
         if self.nav_state == NavState.AUTO_MISSION and self.nav.finished:
             self.nav.set_current(0)

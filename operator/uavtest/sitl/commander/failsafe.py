@@ -1,7 +1,16 @@
-"""Failsafes as data (PX4 ``commander/failsafe``): conditions, and what each action does.
+"""Failsafes as data (PX4 ``commander/failsafe/failsafe.cpp``): conditions, and what each action does.
 
-NAV_DLL_ACT (data link lost) and NAV_RCL_ACT (manual control lost) choose an action; the table
-``ACTION_NAV_STATE`` says which nav state it switches to. Termination cuts the motors.
+NAV_DLL_ACT (data link lost) and NAV_RCL_ACT (manual control lost) choose an action
+(``fromNavDllOrRclActParam``: 1 hold, 2 return, 3 land, 5 terminate, 6 disarm / lockdown);
+COM_LOW_BAT_ACT chooses the battery action per warning level (``fromBatteryWarningActParam``);
+COM_ACT_FAIL_ACT the motor-failure action (``fromActuatorFailureActParam``). The table
+``ACTION_NAV_STATE`` says which nav state an action switches to; termination cuts the motors,
+disarm disarms in the air.
+
+Texts: the condition's STATUSTEXT, then "Failsafe activated: <mode>" (the existing bench
+convention; PX4 sends the same as an event, ``failsafe/framework.cpp``). The battery warnings
+that take no action are PX4's: "Low battery level, return advised", "Critical battery level,
+land now", "Emergency battery level, land immediately".
 """
 
 from __future__ import annotations
@@ -13,6 +22,7 @@ from uavtest.px4.modes import NavState
 
 __all__ = [
     "ACTION_NAV_STATE",
+    "BATTERY_TEXT",
     "DATA_LINK_LOST",
     "GEOFENCE_TEXTS",
     "GF_ACTION_NAV_STATE",
@@ -20,21 +30,31 @@ __all__ = [
     "MANUAL_CONTROL_LOST",
     "NAV_STATE_NAME",
     "OFFBOARD_LOSS_NAV_STATE",
+    "POSITION_LOST",
+    "RCL_EXCEPT_HOLD",
+    "RCL_EXCEPT_MISSION",
+    "RCL_EXCEPT_OFFBOARD",
+    "RC_IN_MODE_DISABLED",
     "Condition",
     "GeofenceAction",
     "NavAction",
     "OffboardLossAction",
+    "actuator_failure_action",
+    "battery_action",
 ]
 
 
 class NavAction(IntEnum):
-    """NAV_DLL_ACT / NAV_RCL_ACT values."""
+    """Failsafe actions, numbered as NAV_DLL_ACT / NAV_RCL_ACT values."""
 
     DISABLED = 0
     HOLD = 1
     RETURN = 2
     LAND = 3
     TERMINATE = 5
+    DISARM = 6
+    WARN = 100  # not a NAV_*_ACT value: report only
+    DESCEND = 101  # not a NAV_*_ACT value: land without a position (mode fallback)
 
 
 #: action → the nav state the commander switches to
@@ -42,7 +62,13 @@ ACTION_NAV_STATE: dict[int, NavState] = {
     NavAction.HOLD: NavState.AUTO_LOITER,
     NavAction.RETURN: NavState.AUTO_RTL,
     NavAction.LAND: NavState.AUTO_LAND,
+    NavAction.DESCEND: NavState.DESCEND,
 }
+
+#: COM_RC_IN_MODE: stick input disabled (no RC-loss failsafe)
+RC_IN_MODE_DISABLED = 4
+#: COM_RCL_EXCEPT bits (ManualControlLossExceptionBits)
+RCL_EXCEPT_MISSION, RCL_EXCEPT_HOLD, RCL_EXCEPT_OFFBOARD = 1, 2, 4
 
 
 @dataclass(frozen=True, slots=True)
@@ -118,3 +144,33 @@ GEOFENCE_TEXTS = (
     ("max_alt", "Geofence violation: exceeding maximum altitude above Home"),
     ("custom", "Geofence violation: approaching or outside geofence"),
 )
+
+
+POSITION_LOST = Condition("COM_POSCTL_NAVL", "Position estimate lost")
+
+#: battery warning level → the STATUSTEXT severity name and text PX4 sends
+BATTERY_TEXT: dict[int, tuple[str, str]] = {
+    1: ("WARNING", "Low battery level, return advised"),
+    2: ("CRITICAL", "Critical battery level, land now"),
+    3: ("EMERGENCY", "Emergency battery level, land immediately"),
+}
+
+
+def battery_action(com_low_bat_act: int, warning: int) -> NavAction:
+    """``Failsafe::fromBatteryWarningActParam``: low warns; critical / emergency per COM_LOW_BAT_ACT."""
+    if warning == 2:
+        return {1: NavAction.RETURN, 3: NavAction.RETURN, 2: NavAction.LAND}.get(
+            com_low_bat_act, NavAction.WARN
+        )
+    if warning == 3:
+        return {1: NavAction.RETURN, 3: NavAction.LAND, 2: NavAction.LAND}.get(
+            com_low_bat_act, NavAction.WARN
+        )
+    return NavAction.WARN if warning == 1 else NavAction.DISABLED
+
+
+def actuator_failure_action(com_act_fail_act: int) -> NavAction:
+    """``Failsafe::fromActuatorFailureActParam``: 0 warn, 1 hold, 2 land, 3 return, 4 terminate."""
+    return {1: NavAction.HOLD, 2: NavAction.LAND, 3: NavAction.RETURN, 4: NavAction.TERMINATE}.get(
+        com_act_fail_act, NavAction.WARN
+    )

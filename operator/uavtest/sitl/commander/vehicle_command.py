@@ -19,6 +19,7 @@ from uavtest.px4.modes import NavState, nav_state_from_custom_mode
 from uavtest.sitl import mav
 from uavtest.sitl.commander.arming import Reason
 from uavtest.sitl.commander.commander import FLOWN_NAV_STATES
+from uavtest.sitl.commander.failure_injection import inject_failure
 from uavtest.sitl.mav import MavCmd, MavResult, MavSeverity, Msg
 from uavtest.sitl.mavlink_io import command_name, custom_mode_name
 from uavtest.sitl.mavlink_streams import STREAMS, autopilot_version
@@ -242,6 +243,7 @@ HANDLERS: dict[int, Handler] = {
     _GET_MESSAGE_INTERVAL: _get_message_interval,
     MavCmd.REQUEST_MESSAGE: _request_message,
     MavCmd.REQUEST_AUTOPILOT_CAPABILITIES: _request_capabilities,
+    MavCmd.INJECT_FAILURE: inject_failure,
 }
 
 
