@@ -4,7 +4,8 @@ A command whose time has come (or passed) becomes one or more steps, run one at 
 COMMAND_LONG steps wait for their COMMAND_ACK (resent on silence, bounded), sticks steps take
 effect at once. Aerialist semantics: ``mode mission`` or ``mode takeoff`` while disarmed arms
 first. While sticks are active MANUAL_CONTROL goes out every ``stick_period_ms`` of vehicle time;
-a switch to a mode that flies by itself (mission, hold, return, land, takeoff) or a disarm ends
+a switch to a mode that flies by itself (mission, hold, return, land, takeoff) centres them (a
+ground station's joystick keeps sending: stopping would be an RC loss to PX4), a disarm ends
 them. A refused arm is retried every second of vehicle time (PX4 refuses until its preflight
 checks pass) for ``arm_give_up_s``, then the scheduler gives up (``gave_up``: the vehicle refused
 to fly); other refusals (DENIED, TEMPORARILY_REJECTED, FAILED) are recorded in ``refusals`` and the
@@ -112,6 +113,7 @@ log = logging.getLogger(__name__)
 SETPOINT_PERIOD_MS = 50
 #: ``mode offboard`` waits until setpoints have streamed this long (PX4 wants them before the switch)
 OFFBOARD_WARMUP_MS = 500
+NEUTRAL_STICKS = ManualControl(x=0, y=0, z=500, r=0)  # centred sticks, hover throttle
 LATE_MS = 1000  # a command that runs later than this after its time shifts the rest of the schedule
 SCHEDULE_SHIFTED = (
     "the command schedule was shifted: a command ran more than 1 s late because the vehicle was not "
@@ -691,8 +693,10 @@ class CommandScheduler:
         if result == AckResult.ACCEPTED:
             if self._retrying_refusal():
                 self.refusals.pop()  # the vehicle armed in the end
-            if step.kind is StepKind.MODE and step.mode in AUTO_MODES:
-                self.sticks = None
+            if step.kind is StepKind.MODE and step.mode in AUTO_MODES and self.sticks is not None:
+                # a ground station's joystick keeps sending, centred: PX4 ignores centred sticks in
+                # the auto modes, and stopping them would be an RC loss (NAV_RCL_ACT) there
+                self.sticks = NEUTRAL_STICKS
             if (step.kind is StepKind.MODE and step.mode is not FlightMode.OFFBOARD) or (
                 step.kind in _LEAVES_OFFBOARD
             ):

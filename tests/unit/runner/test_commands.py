@@ -162,21 +162,30 @@ def test_every_refusal_of_a_mode_is_recorded_not_an_error(result: AckResult) -> 
     assert s.refusals == [Refusal("mode position", result.name, sent_ms=2000, ack_ms=2010)]
 
 
-def test_sticks_stream_at_20_hz_of_vehicle_time_until_an_auto_mode() -> None:
+def test_sticks_stream_at_20_hz_of_vehicle_time_and_centre_in_an_auto_mode() -> None:
+    """After a switch to an auto mode the sticks keep coming, centred (a joystick on a ground
+    station keeps sending: stopping them would be an RC loss to PX4); a disarm ends them."""
     s = CommandScheduler(
-        [cmd(1.0, "sticks", sticks=Sticks(x=0.5, y=-1, z=0.5, r=0)), cmd(3.0, "mode", mode="land")]
+        [
+            cmd(1.0, "sticks", sticks=Sticks(x=0.5, y=-1, z=0.5, r=0)),
+            cmd(3.0, "mode", mode="land"),
+            cmd(5.0, "disarm"),
+        ]
     )
-    sent: list[int] = []
-    for t in range(0, 4000, 10):  # telemetry every 10 ms of vehicle time
+    sent: list[tuple[int, ManualControl]] = []
+    for t in range(0, 6000, 10):  # telemetry every 10 ms of vehicle time
         for msg in s.update(t, t / 1000, armed=True):
             if isinstance(msg, ManualControl):
-                assert msg == ManualControl(500, -1000, 500, 0)
-                sent.append(t)
+                sent.append((t, msg))
             elif msg == mode_command(FlightMode.LAND):
                 s.handle_ack(CommandAck(MODE, AckResult.ACCEPTED), t, t / 1000)
-    assert sent[0] == 1000 and sent[-1] == 3000
-    assert len(sent) == 41  # 1.0 s .. 3.0 s every 50 ms
-    assert all(b - a == 50 for a, b in itertools.pairwise(sent))
+            elif isinstance(msg, CommandLong) and msg.command == ARM:
+                s.handle_ack(CommandAck(ARM, AckResult.ACCEPTED), t, t / 1000)
+    times = [t for t, _ in sent]
+    assert times[0] == 1000 and all(b - a == 50 for a, b in itertools.pairwise(times))
+    assert all(m == ManualControl(500, -1000, 500, 0) for t, m in sent if t <= 3000)
+    assert all(m == ManualControl(0, 0, 500, 0) for t, m in sent if t > 3000)
+    assert times[-1] < 5000, "a disarm ends them"
 
 
 def test_ack_of_another_command_is_not_taken_for_ours() -> None:
