@@ -360,3 +360,60 @@ def test_uavtest_run_yaw_command_is_an_error_naming_it(repo_root: Path, tmp_path
     assert out.summary is not None, out.stderr[-3000:]
     (r,) = out.summary["results"]
     assert r["verdict"] == "error" and "does not support MAV_CMD_CONDITION_YAW" in r["reason"]
+
+
+def test_a_plan_with_a_landing_sequence_is_jumped_to_by_land_start(tmp_path: Path):
+    """A .plan's DO_LAND_START (189) marks the landing sequence; MAV_CMD_DO_LAND_START from the
+    test jumps there mid-mission, and the vehicle lands there instead of flying on (PX4 v1.15)."""
+    import yaml
+
+    from harness.engine_cli import uavtest_run
+
+    def item(cmd: int, lat: float | None = None, lon: float | None = None, alt: float | None = None) -> dict:
+        params = [0, 0, 0, None, lat, lon, alt]
+        return {"type": "SimpleItem", "command": cmd, "frame": 3 if lat is not None else 2, "params": params}
+
+    lat0, lon0 = 47.397742, 8.545594
+    north = 100 / 111_320  # degrees of latitude per 100 m
+    plan = {
+        "fileType": "Plan",
+        "version": 1,
+        "mission": {
+            "items": [
+                item(22, lat0, lon0, 10),
+                item(16, lat0 + north, lon0, 10),  # 100 m north: never reached
+                item(189),
+                item(16, lat0 + north / 10, lon0, 10),  # the approach, 10 m north
+                item(21, lat0 + north / 10, lon0, 0),
+            ],
+            "plannedHomePosition": [lat0, lon0, 488],
+        },
+    }
+    test = tmp_path / "land-start.yaml"
+    test.write_text(
+        yaml.safe_dump(
+            {
+                "apiVersion": "uavtest.io/v1alpha1",
+                "kind": "UavTest",
+                "metadata": {"name": "land-start"},
+                "spec": {
+                    "replicas": 1,
+                    "timeout": 200,
+                    "mission": {"plan": plan},
+                    "commands": [
+                        {"at": 1, "action": "mode", "mode": "mission"},
+                        {"at": 20, "action": "land_start"},
+                    ],
+                    "assertions": {"geofence": {"minX": -10, "maxX": 60, "minY": -20, "maxY": 20}},
+                },
+            }
+        )
+    )
+    out = uavtest_run(test, tmp_path / "out")
+    assert out.code == 0, out.stderr[-3000:]
+    (r,) = out.summary["results"]
+    assert r["verdict"] == "pass"
+    traj = next((tmp_path / "out").rglob("replica-0/trajectory.csv")).read_text().splitlines()[1:]
+    xs = [float(row.split(",")[1]) for row in traj]
+    assert 15 < max(xs) < 60, "it turned back before the far waypoint"
+    assert abs(xs[-1] - 10) < 2, "and landed at the landing sequence's point"

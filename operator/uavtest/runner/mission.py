@@ -63,6 +63,8 @@ def wire_items(items: Sequence[MissionItem], home: Home) -> list[MissionItemInt]
             wire = MissionItemInt(seq, FRAME_GLOBAL_RELATIVE_ALT_INT, Cmd.NAV_LAND, 0, 0, 0, _NAN, x, y, 0.0)
         elif kind is MissionItemKind.RETURN:
             wire = MissionItemInt(seq, FRAME_MISSION, Cmd.NAV_RETURN_TO_LAUNCH)
+        elif kind is MissionItemKind.LAND_START:
+            wire = MissionItemInt(seq, FRAME_MISSION, Cmd.DO_LAND_START)
         elif kind is MissionItemKind.CHANGE_SPEED:
             wire = MissionItemInt(seq, FRAME_MISSION, Cmd.DO_CHANGE_SPEED, 1.0, item.speed or -1.0, -1.0)
         else:  # pragma: no cover - MissionItemKind is closed

@@ -181,6 +181,7 @@ class MissionItemKind(StrEnum):
     RETURN = "return"
     LOITER_TIME = "loiterTime"
     CHANGE_SPEED = "changeSpeed"
+    LAND_START = "landStart"  # DO_LAND_START: a marker MAV_CMD_DO_LAND_START (and Return, RTL_TYPE) jumps to
 
 
 MISSION_ITEM_CMD: dict[MissionItemKind, int] = {
@@ -190,6 +191,7 @@ MISSION_ITEM_CMD: dict[MissionItemKind, int] = {
     MissionItemKind.RETURN: 20,
     MissionItemKind.LOITER_TIME: 19,
     MissionItemKind.CHANGE_SPEED: 178,
+    MissionItemKind.LAND_START: 189,
 }
 
 

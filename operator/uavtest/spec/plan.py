@@ -1,7 +1,7 @@
 """QGroundControl ``.plan`` documents → mission items.
 
 Supported simple items (MAV_CMD numbers): takeoff 22, waypoint 16, land 21, return 20,
-loiter-time 19, change-speed 178. Command 530 (SET_CAMERA_MODE, which QGC puts first in
+loiter-time 19, change-speed 178, land-start 189. Command 530 (SET_CAMERA_MODE, which QGC puts first in
 every plan drawn for a camera-less vehicle) is skipped with a warning. Anything else, and
 every complex item (survey, corridor scan, structure scan), is refused with a message naming
 the command and the item.
@@ -271,8 +271,8 @@ def _item(
                 allowed=f"a ground speed > 0 and <= {SPEED_MAX:g} m/s",
             )
         return MissionItem(kind=kind, speed=speed)
-    if kind == MissionItemKind.RETURN:
-        return MissionItem(kind=kind)
+    if kind in (MissionItemKind.RETURN, MissionItemKind.LAND_START):
+        return MissionItem(kind=kind)  # a land start's optional position is not used by PX4's jump
     lat, lon, alt = _param(params, 4), _param(params, 5), _param(params, 6)
     if frame in _AMSL_FRAMES and alt is not None:
         alt -= home_alt
