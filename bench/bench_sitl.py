@@ -4,12 +4,14 @@
 2. over UDP: ``uavtest sitl --lockstep`` as a process and a minimal lockstep client written
    here (params, mission upload, arm, mission mode, fixed grants of 50, 200 and 1000 ms — the
    runner's default is up to 1000 ms, shorter only around commands, sticks and obstacles),
-   start-up included.
+   start-up included. Once connected the client asks for the telemetry it reads, as the runner
+   does (``uavtest.runner.streams``); ``--all-streams`` keeps PX4's full ONBOARD default rates
+   (~300 messages per simulated second) to show what a client that takes everything costs.
 
 PX4 v1.15 SIH on this machine, for comparison: at most ~18x real time (speed factor 20 uses
 1.2 cores), ~36 s of simulated boot before it is ready for takeoff.
 
-Usage: python bench/bench_sitl.py [--data ../shared/data] [--repeat 3]
+Usage: python bench/bench_sitl.py [--data ../shared/data] [--repeat 3] [--all-streams]
 """
 
 from __future__ import annotations
@@ -25,6 +27,11 @@ import time
 from pathlib import Path
 
 from uavtest.engine.replica import sitl_command
+
+try:  # the runner's stream requests (absent from trees older than PX4's per-link rates)
+    from uavtest.runner.streams import STREAM_INTERVALS_US
+except ImportError:  # pragma: no cover - benchmarking an older tree side by side
+    STREAM_INTERVALS_US = {}
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.mav import Msg
 from uavtest.sitl.mavlink_io import Codec
@@ -109,7 +116,9 @@ class LockstepClient:
                 return found
 
 
-def over_udp(test: Path, seed: int, step_ms: int = 50) -> tuple[float, float, float, int, float, float]:
+def over_udp(
+    test: Path, seed: int, step_ms: int = 50, *, all_streams: bool = False
+) -> tuple[float, float, float, int, float, float]:
     spec = load_test(test).spec
     items = from_spec(mission_items(spec))
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
@@ -126,6 +135,16 @@ def over_udp(test: Path, seed: int, step_ms: int = 50) -> tuple[float, float, fl
     try:
         client.until(lambda m: m.name == "HEARTBEAT", grant=False)
         startup = time.monotonic() - wall0
+        for msg_id, interval in ({} if all_streams else STREAM_INTERVALS_US).items():
+            client.send(
+                "COMMAND_LONG",
+                target_system=1,
+                target_component=1,
+                command=511,
+                param1=msg_id,
+                param2=interval,
+            )
+            client.until(lambda m: m.name == "COMMAND_ACK", grant=False)
         for name, value in spec.vehicle.params.items():
             ptype = 6 if isinstance(value, int) else 9
             client.send(
@@ -193,12 +212,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=Path(__file__).resolve().parents[2] / "shared" / "data")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--all-streams", action="store_true", help="keep PX4's full ONBOARD stream rates")
     args = ap.parse_args()
     test = args.data / "competition" / "snippets" / "case_studies" / "mission2.yaml"
     in_process(test, args.repeat)
     for step_ms in (50, 200, 1000):
         for seed in range(args.repeat):
-            sim_s, wall_s, startup, n, sim_cpu, client_cpu = over_udp(test, seed, step_ms)
+            sim_s, wall_s, startup, n, sim_cpu, client_cpu = over_udp(
+                test, seed, step_ms, all_streams=args.all_streams
+            )
             print(
                 f"over UDP, lockstep grants of {step_ms} ms, seed {seed}: {sim_s:.1f} s simulated in "
                 f"{wall_s:.2f} s wall = {sim_s / wall_s:.0f}x real time, start-up included "

@@ -220,6 +220,8 @@ class _Edge:
     def __init__(self, vehicle: Vehicle, links: list[Link], log_server: LogServer, lockstep: bool) -> None:
         self.vehicle = vehicle
         self.links = links
+        for i, link in enumerate(links):  # a quiet link builds no telemetry until a client speaks
+            vehicle.streaming[i] = link.always_stream
         self.by_fd = {link.sock.fileno(): link for link in links}
         self.index = {id(link): i for i, link in enumerate(links)}
         self.log_server = log_server
@@ -254,7 +256,9 @@ class _Edge:
         """Handle one datagram; True when it held a lockstep grant that advanced the clock."""
         vehicle = self.vehicle
         link.dest = addr
-        link.peer_seen = True
+        if not link.peer_seen:
+            link.peer_seen = True
+            vehicle.streaming[self.index[id(link)]] = True  # a quiet link streams from now on
         granted = False
         for msg in link.codec.decode(data):
             if msg.name == "NAMED_VALUE_INT" and str(msg.get("name", "")).rstrip("\x00") == LOCKSTEP_NAME:

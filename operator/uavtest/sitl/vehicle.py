@@ -132,6 +132,8 @@ class Vehicle:
         self.mission_proto = MissionProtocol()
         self.link_names = [name for name, _ in config.links]
         self.schedules = [Schedule(MODES[mode]) for _, mode in config.links]
+        #: links that stream telemetry (the edge turns a quiet GCS link on once a station speaks)
+        self.streaming = [True] * len(self.schedules)
         self.rx_link = 0  # the link of the message being handled (SET_MESSAGE_INTERVAL applies to it)
         self.recorder = FlightRecorder(
             sink,
@@ -454,6 +456,8 @@ class Vehicle:
             return
         built: dict[str, Msg] = {}
         for i, schedule in enumerate(schedules):
+            if not self.streaming[i]:
+                continue  # nothing is built for a quiet link
             for name in schedule.due(t):
                 if name not in held:
                     msg = built.get(name)
