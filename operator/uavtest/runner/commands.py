@@ -187,12 +187,21 @@ def command_name(command: int) -> str:
         return f"MAV_CMD {command}"
 
 
+#: commands PX4 v1.15's commander answers UNSUPPORTED itself (Commander.cpp has no handler):
+#: telling the user to fly them on PX4 would send them nowhere
+NOT_IN_PX4_V115 = frozenset({"MAV_CMD_CONDITION_YAW"})
+
+
 def unsupported_reason(what: str, simulator: str | None) -> str:
     """The bench error for a command the vehicle answered MAV_RESULT_UNSUPPORTED.
 
     ``what``: "mode offboard" or "MAV_CMD_DO_ORBIT"; ``simulator``: "builtin", "px4" or None
     (a vehicle of unknown kind).
     """
+    if what in NOT_IN_PX4_V115:
+        return (
+            f"{what} is not supported by PX4 v1.15 either (nor by the built-in simulator, which follows it)"
+        )
     if simulator == "builtin":
         return f"the built-in simulator does not support {what}; fly this test with simulator: px4"
     if simulator == "px4":

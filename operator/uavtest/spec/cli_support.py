@@ -15,11 +15,19 @@ from uavtest.spec.commands import resolved_commands
 from uavtest.spec.crd import crd_yaml
 from uavtest.spec.loaders import load_test
 from uavtest.spec.mission import mission_items
+from uavtest.spec.models import CommandAction
 from uavtest.spec.px4_params import unmodelled_notice, unmodelled_params
 from uavtest.spec.render import render
 from uavtest.spec.yaml_io import dump_yaml
 
 __all__ = ["crd_command", "render_command", "validate_command"]
+
+
+#: PX4 v1.15's commander has no handler for MAV_CMD_CONDITION_YAW (Commander.cpp: UNSUPPORTED)
+YAW_NOTICE = (
+    "action yaw sends MAV_CMD_CONDITION_YAW, which PX4 v1.15 answers UNSUPPORTED (so does the "
+    "built-in simulator): the replica will end error; give the yaw with a goto or a setpoint instead"
+)
 
 
 def _plural(n: int, word: str) -> str:
@@ -42,6 +50,8 @@ def validate_command(test: Path, *, out: TextIO | None = None) -> int:
     notice = unmodelled_notice(unmodelled_params(spec))
     if notice:
         print(f"warning: {notice}", file=out)
+    if any(c.action == CommandAction.YAW for c in commands):
+        print(f"warning: {YAW_NOTICE}", file=out)
     return int(ExitCode.PASS)
 
 

@@ -261,3 +261,8 @@ def test_a_command_less_than_a_second_late_does_not_shift_the_schedule() -> None
         if sched._current is not None:
             sched.handle_ack(CommandAck(sched._current.command.command, 0), now, now / 1000)
     assert sent == [1_500, 3_000] and sched.warnings == []
+
+
+def test_unsupported_by_px4_itself_does_not_send_the_user_to_px4() -> None:
+    reason = unsupported_reason("MAV_CMD_CONDITION_YAW", "builtin")
+    assert "not supported by PX4 v1.15 either" in reason and "fly this test with simulator: px4" not in reason

@@ -266,3 +266,20 @@ def test_examples_validate(repo_root: Path, uavtest) -> None:
     for name in ("offboard-square.yaml", "geofence-return.yaml", "gps-loss-land.yaml"):
         result = uavtest("validate", repo_root / "examples" / name)
         assert result.returncode == 0, (name, result.stderr)
+
+
+def test_validate_warns_that_px4_v115_does_not_do_condition_yaw(tmp_path) -> None:
+    import io
+
+    from uavtest.spec.cli_support import validate_command
+
+    test = tmp_path / "yaw.yaml"
+    test.write_text(
+        "apiVersion: uavtest.io/v1alpha1\nkind: UavTest\nmetadata: {name: y}\nspec:\n"
+        "  mission: {waypoints: [{x: 5, 'y': 0, z: -5}]}\n"
+        "  commands:\n    - {at: 1, action: mode, mode: mission}\n"
+        "    - {at: 9, action: yaw, yaw: {heading: 90}}\n"
+    )
+    out = io.StringIO()
+    assert validate_command(test, out=out) == 0
+    assert "MAV_CMD_CONDITION_YAW, which PX4 v1.15 answers UNSUPPORTED" in out.getvalue()
