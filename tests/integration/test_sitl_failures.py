@@ -6,7 +6,6 @@ from __future__ import annotations
 import csv
 import math
 import os
-import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -15,8 +14,9 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink2
 
 from harness.engine_cli import uavtest_run
-from integration.test_sitl_mavlink import LockstepClient, free_udp_port
-from integration.test_sitl_mavsdk import eventually
+from harness.mavlink_client import LockstepClient
+from harness.net import free_udp_port
+from harness.sitl import eventually, running_sitl
 from integration.test_sitl_mavsdk import sitl_port as sitl_port  # the fixture
 from uavtest.engine.replica import sitl_command
 from uavtest.sitl.params import encode_param_value
@@ -33,19 +33,14 @@ def vehicle(tmp_path: Path, shared_data: Path) -> Iterator[LockstepClient]:
     port = free_udp_port()
     test = shared_data / "competition" / "snippets" / "case_studies" / "mission2.yaml"
     client = LockstepClient(port)
-    proc = subprocess.Popen(
-        sitl_command(
-            sys.executable, test, 7, api_port=port, gcs_port=free_udp_port(), log_dir=tmp_path / "log"
-        ),
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    argv = sitl_command(
+        sys.executable, test, 7, api_port=port, gcs_port=free_udp_port(), log_dir=tmp_path / "log"
     )
     try:
-        client.wait(lambda m: m.get_type() == "NAMED_VALUE_INT" and m.name == "LOCKSTEP", grant=False)
-        yield client
+        with running_sitl(argv, env={**os.environ, "PYTHONUNBUFFERED": "1"}, graceful=False):
+            client.wait(lambda m: m.get_type() == "NAMED_VALUE_INT" and m.name == "LOCKSTEP", grant=False)
+            yield client
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
         client.conn.close()
 
 

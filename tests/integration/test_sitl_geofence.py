@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 import os
-import socket
 import subprocess
 import sys
 import time
@@ -15,10 +14,12 @@ from pathlib import Path
 
 import pytest
 import yaml
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import common as mavlink2
 from pyulog import ULog
 
+from harness.mavlink_client import connect
+from harness.net import free_udp_port
+from harness.sitl import stop_sitl
 from uavtest.engine.replica import sitl_command
 from uavtest.sitl.geo import Projection
 from uavtest.spec.models import Home
@@ -36,21 +37,12 @@ LOITER, RTL, LAND, POSCTL = (4, 3), (4, 5), (4, 6), (3, 0)
 DEADLINE_S = 60.0
 
 
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 class LockstepClient:
-    """As test_sitl_mavlink's: receives, grants 50 ms of vehicle time when asked (``wait``)."""
+    """Not harness.mavlink_client.LockstepClient: ``wait`` never grants vehicle time (``grant`` is
+    ignored: `Vehicle` grants, streaming sticks), has no vehicle-time limit and keeps no ``seen``."""
 
     def __init__(self, port: int) -> None:
-        self.conn = mavutil.mavlink_connection(
-            f"udpin:127.0.0.1:{port}", source_system=255, source_component=190, dialect="common"
-        )
-        self.conn.mav = mavlink2.MAVLink(self.conn, srcSystem=255, srcComponent=190)
-        self.conn.mav.robust_parsing = True
+        self.conn = connect(port)
         self.t_ms = -1
 
     def recv(self, timeout: float = 5.0):
@@ -94,7 +86,7 @@ class Vehicle:
                 sys.executable, test, 3, api_port=port, gcs_port=free_udp_port(), log_dir=self.log_dir
             ),
             env={**os.environ, "PYTHONUNBUFFERED": "1"},
-        )
+        )  # not running_sitl: the process lives as long as this Vehicle, ended in close()
         self.c.wait(lambda m: m.get_type() == "HEARTBEAT", grant=False)
         self.sticks = (0, 0, 500, 0)
         self.mode = (4, 3)
@@ -104,9 +96,7 @@ class Vehicle:
         self._chunks: dict[int, list[str]] = {}
 
     def close(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait()
+        stop_sitl(self.proc, graceful=False)
         self.c.conn.close()
 
     def upload(self, mtype: int, items: list[tuple[int, float, float, float]]) -> int:

@@ -5,77 +5,25 @@ from __future__ import annotations
 import math
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import common as mavlink2
 from pyulog import ULog
 
+from harness.mavlink_client import LockstepClient
+from harness.net import free_udp_port
+from harness.sitl import running_sitl
 from uavtest.engine.replica import sitl_command
 from uavtest.sitl.params import decode_param_value, encode_param_value
 from uavtest.spec.loaders import load_test
 from uavtest.spec.mission import mission_items
 
 pytestmark = pytest.mark.integration
-
-DEADLINE_S = 60.0
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-class LockstepClient:
-    """A minimal lockstep client: grants 50 ms of vehicle time whenever the sim waits."""
-
-    def __init__(self, port: int) -> None:
-        self.conn = mavutil.mavlink_connection(
-            f"udpin:127.0.0.1:{port}", source_system=255, source_component=190, dialect="common"
-        )
-        self.conn.mav = mavlink2.MAVLink(self.conn, srcSystem=255, srcComponent=190)
-        self.conn.mav.robust_parsing = True
-        self.t_ms = -1
-        self.seen: list = []
-
-    def recv(self, timeout: float = 5.0):
-        msg = self.conn.recv_match(blocking=True, timeout=timeout)
-        if msg is not None:
-            if msg.get_type() == "NAMED_VALUE_INT" and msg.name == "LOCKSTEP":
-                self.t_ms = max(self.t_ms, msg.value)
-            self.seen.append(msg)
-        return msg
-
-    def wait(self, cond: Callable, vehicle_s: float = 300.0, *, grant: bool = True):
-        """Receive (granting time in lockstep) until ``cond(msg)``; fails after the limits."""
-        wall = time.monotonic() + DEADLINE_S
-        limit_ms = None
-        while time.monotonic() < wall:
-            msg = self.recv(1.0)
-            if msg is None:
-                continue
-            if cond(msg):
-                return msg
-            if limit_ms is None and self.t_ms >= 0:
-                limit_ms = self.t_ms + vehicle_s * 1000
-            if grant and msg.get_type() == "NAMED_VALUE_INT" and msg.name == "LOCKSTEP":
-                if limit_ms is not None and msg.value > limit_ms:
-                    break
-                self.conn.mav.named_value_int_send(msg.value, b"LOCKSTEP", msg.value + 50)
-        raise AssertionError("condition not met in time")
-
-    def command(self, cmd: int, *params: float) -> int:
-        p = list(params) + [0.0] * (7 - len(params))
-        self.conn.mav.command_long_send(1, 1, cmd, 0, *p)
-        ack = self.wait(lambda m: m.get_type() == "COMMAND_ACK" and m.command == cmd, grant=False)
-        return ack.result
 
 
 @pytest.fixture
@@ -84,16 +32,11 @@ def sitl(tmp_path: Path, shared_data: Path) -> Iterator[tuple[LockstepClient, su
     log_dir = tmp_path / "log"
     test = shared_data / "competition" / "snippets" / "case_studies" / "mission2.yaml"
     client = LockstepClient(port)
-    proc = subprocess.Popen(
-        sitl_command(sys.executable, test, 5, api_port=port, gcs_port=free_udp_port(), log_dir=log_dir),
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
-    )
+    argv = sitl_command(sys.executable, test, 5, api_port=port, gcs_port=free_udp_port(), log_dir=log_dir)
     try:
-        yield client, proc, log_dir
+        with running_sitl(argv, env={**os.environ, "PYTHONUNBUFFERED": "1"}, graceful=False) as proc:
+            yield client, proc, log_dir
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
         client.conn.close()
 
 

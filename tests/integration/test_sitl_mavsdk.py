@@ -6,65 +6,24 @@ PX4 SITL would; MAVSDK reads telemetry, uploads a mission, arms, starts it and s
 
 from __future__ import annotations
 
-import signal
-import socket
-import subprocess
-import sys
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+
+from harness.net import free_udp_port
+from harness.sitl import eventually, free_running_argv, running_sitl
 
 pytestmark = pytest.mark.integration
 
 mavsdk = pytest.importorskip("mavsdk")
 
 
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def eventually(condition: Callable[[], bool], seconds: float, what: str) -> None:
-    deadline = time.monotonic() + seconds
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.05)
-
-
 @pytest.fixture
 def sitl_port(tmp_path: Path) -> Iterator[int]:
     port = free_udp_port()
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "uavtest.cli",
-            "sitl",
-            "--speed-factor",
-            "10",
-            "--api-port",
-            str(port),
-            "--api-local-port",
-            "0",
-            "--gcs-local-port",
-            "0",
-            "--log-dir",
-            str(tmp_path / "log"),
-        ]
-    )
-    try:
+    with running_sitl(free_running_argv(port, tmp_path / "log", 10)):
         yield port
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
 
 
 def test_mavsdk_reads_telemetry_uploads_arms_and_flies_a_mission(sitl_port: int):

@@ -10,14 +10,15 @@ from __future__ import annotations
 
 import json
 import os
-import signal
-import socket
 import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+
+from harness.net import free_udp_port
+from harness.sitl import free_running_argv, running_sitl
 
 pytestmark = pytest.mark.integration
 
@@ -51,36 +52,9 @@ def mavsdk3_path() -> Path:
 
 @pytest.fixture
 def sitl_port(tmp_path: Path) -> Iterator[int]:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "uavtest.cli",
-            "sitl",
-            "--speed-factor",
-            "5",
-            "--api-port",
-            str(port),
-            "--api-local-port",
-            "0",
-            "--gcs-local-port",
-            "0",
-            "--log-dir",
-            str(tmp_path / "log"),
-        ]
-    )
-    try:
+    port = free_udp_port()
+    with running_sitl(free_running_argv(port, tmp_path / "log", 5)):
         yield port
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
 
 
 def test_mavsdk3_connects_uploads_arms_flies_a_mission_and_lands(mavsdk3_path: Path, sitl_port: int):

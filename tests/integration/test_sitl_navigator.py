@@ -5,17 +5,16 @@ from __future__ import annotations
 
 import math
 import os
-import signal
-import socket
-import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from pymavlink import mavutil
-from pymavlink.dialects.v20 import common as mavlink2
+
+from harness.mavlink_client import connect
+from harness.net import free_udp_port
+from harness.sitl import eventually, free_running_argv, running_sitl
 
 pytestmark = pytest.mark.integration
 
@@ -26,25 +25,19 @@ AUTO, POSCTL = 4, 3
 LOITER, SUB_MISSION, RTL = 3, 4, 5
 
 
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 def mode(hb) -> tuple[int, int]:
     return (hb.custom_mode >> 16) & 0xFF, (hb.custom_mode >> 24) & 0xFF
 
 
 class Client:
-    """A lockstep pymavlink client: grants 50 ms of vehicle time whenever the sim waits."""
+    """A lockstep pymavlink client: grants 50 ms of vehicle time whenever the sim waits.
+
+    Not harness.mavlink_client.LockstepClient: it keeps the last message of each type and the
+    STATUSTEXTs instead of every message, acks wait granting time, and the vehicle-time limit
+    starts at the first LOCKSTEP seen; DEADLINE_S here is 90 s."""
 
     def __init__(self, port: int) -> None:
-        self.conn = mavutil.mavlink_connection(
-            f"udpin:127.0.0.1:{port}", source_system=255, source_component=190, dialect="common"
-        )
-        self.conn.mav = mavlink2.MAVLink(self.conn, srcSystem=255, srcComponent=190)
-        self.conn.mav.robust_parsing = True
+        self.conn = connect(port)
         self.last: dict[str, object] = {}
         self.texts: list[str] = []
 
@@ -129,14 +122,11 @@ def client(tmp_path: Path) -> Iterator[Client]:
     argv = [sys.executable, "-m", "uavtest.cli", "sitl", "--seed", "3", "--host", "127.0.0.1"]
     argv += ["--api-port", str(port), "--gcs-port", str(free_udp_port()), "--api-local-port", "0"]
     argv += ["--gcs-local-port", "0", "--log-dir", str(tmp_path / "log"), "--lockstep"]
-    proc = subprocess.Popen(argv, env={**os.environ, "PYTHONUNBUFFERED": "1"})
     try:
-        yield c
-        assert proc.poll() is None, "the simulator died"
+        with running_sitl(argv, env={**os.environ, "PYTHONUNBUFFERED": "1"}, graceful=False) as proc:
+            yield c
+            assert proc.poll() is None, "the simulator died"
     finally:
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
         c.conn.close()
 
 
@@ -258,27 +248,8 @@ def test_change_speed_in_hold_limits_a_reposition(client: Client):
 @pytest.fixture
 def sitl_port(tmp_path: Path) -> Iterator[int]:
     port = free_udp_port()
-    argv = [sys.executable, "-m", "uavtest.cli", "sitl", "--speed-factor", "10", "--api-port", str(port)]
-    argv += ["--api-local-port", "0", "--gcs-local-port", "0", "--log-dir", str(tmp_path / "log")]
-    proc = subprocess.Popen(argv)
-    try:
+    with running_sitl(free_running_argv(port, tmp_path / "log", 10)):
         yield port
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-
-
-def eventually(condition: Callable[[], bool], seconds: float, what: str) -> None:
-    deadline = time.monotonic() + seconds
-    while time.monotonic() < deadline:
-        if condition():
-            return
-        time.sleep(0.05)
-    raise AssertionError(f"timed out waiting for {what}")
 
 
 def test_mavsdk_goto_location_and_do_orbit(sitl_port: int):

@@ -11,9 +11,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import signal
-import socket
-import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -21,10 +18,12 @@ from pathlib import Path
 
 import pytest
 import yaml
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import common as mavlink2
 
 from harness.engine_cli import uavtest_run
+from harness.mavlink_client import connect
+from harness.net import free_udp_port
+from harness.sitl import eventually, free_running_argv, running_sitl
 from uavtest.engine.replica import sitl_command
 from uavtest.sitl.params import encode_param_value
 
@@ -35,21 +34,14 @@ DEADLINE_S = 60.0
 POS_ONLY = 0x0DF8  # x y z and yaw (MAVSDK set_position_ned's mask)
 
 
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 class Client:
-    """A lockstep pymavlink client that can stream SET_POSITION_TARGET_LOCAL_NED with each grant."""
+    """A lockstep pymavlink client that can stream SET_POSITION_TARGET_LOCAL_NED with each grant.
+
+    Not harness.mavlink_client.LockstepClient: it sends the setpoint with each grant, keeps the last
+    LOCAL_POSITION_NED and starts the vehicle-time limit at the first LOCKSTEP it sees."""
 
     def __init__(self, port: int) -> None:
-        self.conn = mavutil.mavlink_connection(
-            f"udpin:127.0.0.1:{port}", source_system=255, source_component=190, dialect="common"
-        )
-        self.conn.mav = mavlink2.MAVLink(self.conn, srcSystem=255, srcComponent=190)
-        self.conn.mav.robust_parsing = True
+        self.conn = connect(port)
         self.t_ms = -1
         self.seen: list = []
         self.setpoint: tuple[float, float, float] | None = None
@@ -117,23 +109,14 @@ def client(tmp_path: Path) -> Iterator[Client]:
     )
     port = free_udp_port()
     c = Client(port)
-    proc = subprocess.Popen(
-        sitl_command(
-            sys.executable, test, 3, api_port=port, gcs_port=free_udp_port(), log_dir=tmp_path / "log"
-        ),
-        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    argv = sitl_command(
+        sys.executable, test, 3, api_port=port, gcs_port=free_udp_port(), log_dir=tmp_path / "log"
     )
     try:
-        c.wait(lambda m: m.get_type() == "SYS_STATUS" and m.onboard_control_sensors_health & 0x10000000)
-        yield c
+        with running_sitl(argv, env={**os.environ, "PYTHONUNBUFFERED": "1"}):
+            c.wait(lambda m: m.get_type() == "SYS_STATUS" and m.onboard_control_sensors_health & 0x10000000)
+            yield c
     finally:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGTERM)
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
         c.conn.close()
 
 
@@ -184,11 +167,7 @@ def test_mavsdk_offboard_square(tmp_path: Path):
 
     assert mavsdk
     port = free_udp_port()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "uavtest.cli", "sitl", "--speed-factor", "5", "--api-port", str(port),
-         "--api-local-port", "0", "--gcs-local-port", "0", "--log-dir", str(tmp_path / "log")]
-    )  # fmt: skip
-    try:
+    with running_sitl(free_running_argv(port, tmp_path / "log", 5)):
         sdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
         sdk.add_any_connection(f"udpin://127.0.0.1:{port}")
         system = sdk.first_autopilot(15.0)
@@ -213,21 +192,6 @@ def test_mavsdk_offboard_square(tmp_path: Path):
         offboard.stop()  # PX4: leaves offboard for Hold
         action.land()
         eventually(lambda: not telemetry.armed(), 40, "landed and disarmed")
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-
-
-def eventually(condition: Callable[[], bool], seconds: float, what: str) -> None:
-    deadline = time.monotonic() + seconds
-    while not condition():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.05)
 
 
 def test_example_offboard_square_passes_inside_its_fence(tmp_path: Path):

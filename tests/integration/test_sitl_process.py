@@ -20,6 +20,8 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink2
 from pyulog import ULog
 
+from harness.net import free_udp_port
+
 pytestmark = pytest.mark.integration
 
 DEADLINE_S = 15.0
@@ -65,12 +67,6 @@ class Client:
 
     def close(self) -> None:
         self.sock.close()
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def sitl_argv(port: int, log_dir: Path, *extra: str) -> list[str]:

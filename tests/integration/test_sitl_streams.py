@@ -7,7 +7,6 @@ from __future__ import annotations
 import math
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
@@ -16,27 +15,15 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import common as mavlink2
+
+from harness.mavlink_client import connect
+from harness.net import free_udp_port
+from harness.sitl import running_sitl
 
 pytestmark = pytest.mark.integration
 
 SPEED = 2.0
-
-
-def free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-def connect(port: int):
-    conn = mavutil.mavlink_connection(
-        f"udpin:127.0.0.1:{port}", source_system=255, source_component=190, dialect="common"
-    )
-    conn.mav = mavlink2.MAVLink(conn, srcSystem=255, srcComponent=190)
-    conn.mav.robust_parsing = True
-    return conn
 
 
 def collect(conn, wall_s: float) -> list:
@@ -72,23 +59,13 @@ def sim(tmp_path: Path) -> Iterator[tuple[int, int, Path]]:
     earlier.parent.mkdir(parents=True)
     earlier.write_bytes(b"ULog\x01\x12\x35" + bytes(200))
     env = {k: v for k, v in os.environ.items() if k != "UAVTEST_SITL_UTC"}
-    proc = subprocess.Popen(
-        [
-            *(sys.executable, "-m", "uavtest.cli", "sitl", "--speed-factor", str(SPEED)),
-            *("--api-port", str(api), "--gcs-port", str(gcs), "--api-local-port", "0"),
-            *("--gcs-local-port", "0", "--log-dir", str(log_dir)),
-        ],
-        env={**env, "PYTHONUNBUFFERED": "1"},
-    )
-    try:
+    argv = [
+        *(sys.executable, "-m", "uavtest.cli", "sitl", "--speed-factor", str(SPEED)),
+        *("--api-port", str(api), "--gcs-port", str(gcs), "--api-local-port", "0"),
+        *("--gcs-local-port", "0", "--log-dir", str(log_dir)),
+    ]
+    with running_sitl(argv, env={**env, "PYTHONUNBUFFERED": "1"}):
         yield api, gcs, earlier
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
 
 
 def test_links_stream_their_modes_from_boot_and_intervals_are_per_link(sim):
