@@ -6,9 +6,6 @@ This module is the one boundary where ``UavTestError`` becomes a message and an 
 
 from __future__ import annotations
 
-import logging
-import os
-import sys
 from pathlib import Path
 from typing import Annotated
 
@@ -16,7 +13,7 @@ import typer
 from rich.console import Console
 
 from uavtest.engine.entry import runner, sitl
-from uavtest.errors import ExitCode, UavTestError
+from uavtest.errors import run_at_boundary
 
 app = typer.Typer(
     name="uavtest",
@@ -138,19 +135,12 @@ app.command()(sitl)
 
 def main() -> None:
     """Entry point: run the app, translate known errors to messages and exit codes."""
-    logging.basicConfig(
-        level=os.environ.get("UAVTEST_LOG_LEVEL", "INFO").upper(),
-        format="%(levelname)s: %(message)s",
-        stream=sys.stderr,
-    )
-    try:
-        app(standalone_mode=True)
-    except UavTestError as e:
-        err.print(f"[bold red]error:[/] {e}", highlight=False, soft_wrap=True)
-        sys.exit(int(e.exit_code))
-    except KeyboardInterrupt:
-        err.print("interrupted")
-        sys.exit(int(ExitCode.INFRASTRUCTURE))
+
+    def say(text: str) -> None:
+        head, _, rest = text.partition(": ")
+        err.print(f"[bold red]{head}:[/] {rest}" if rest else text, highlight=False, soft_wrap=True)
+
+    run_at_boundary(lambda: app(standalone_mode=True), say)
 
 
 if __name__ == "__main__":

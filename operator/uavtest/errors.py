@@ -6,6 +6,10 @@ the file, the field, the value and what is allowed (or the missing path).
 
 from __future__ import annotations
 
+import logging
+import os
+import sys
+from collections.abc import Callable
 from enum import IntEnum
 
 __all__ = [
@@ -14,6 +18,7 @@ __all__ = [
     "InfrastructureError",
     "MissingFile",
     "UavTestError",
+    "run_at_boundary",
 ]
 
 
@@ -78,3 +83,21 @@ class InfrastructureError(UavTestError):
     """The bench failed, not the drone: a process died, a port was taken, a store is unreachable."""
 
     exit_code = ExitCode.INFRASTRUCTURE
+
+
+def run_at_boundary(run: Callable[[], object], say: Callable[[str], None]) -> None:
+    """The boundary of a command-line entry point: log to stderr at ``UAVTEST_LOG_LEVEL``, run,
+    and turn a ``UavTestError`` into ``say("error: ...")`` and its exit code (Ctrl-C: 3)."""
+    logging.basicConfig(
+        level=os.environ.get("UAVTEST_LOG_LEVEL", "INFO").upper(),
+        format="%(levelname)s: %(message)s",
+        stream=sys.stderr,
+    )
+    try:
+        run()
+    except UavTestError as e:
+        say(f"error: {e}")
+        sys.exit(int(e.exit_code))
+    except KeyboardInterrupt:
+        say("interrupted")
+        sys.exit(int(ExitCode.INFRASTRUCTURE))

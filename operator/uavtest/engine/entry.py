@@ -10,14 +10,13 @@ error), never a traceback.
 from __future__ import annotations
 
 import logging
-import os
 import sys
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from uavtest.errors import ExitCode, UavTestError
+from uavtest.errors import run_at_boundary
 
 __all__ = ["app", "main", "runner", "sitl"]
 
@@ -120,7 +119,6 @@ def sitl(
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="log to stderr")] = False,
 ) -> None:
     """Run the built-in PX4-compatible simulator (MAVLink 2 over UDP) until SIGTERM."""
-    import logging
 
     from uavtest.sitl.main import run_sitl
 
@@ -150,19 +148,7 @@ app.command()(sitl)
 
 def main() -> None:
     """Entry point: run the command, translate known errors to a message and an exit code."""
-    logging.basicConfig(
-        level=os.environ.get("UAVTEST_LOG_LEVEL", "INFO").upper(),
-        format="%(levelname)s: %(message)s",
-        stream=sys.stderr,
-    )
-    try:
-        app(standalone_mode=True)
-    except UavTestError as e:
-        print(f"error: {e}", file=sys.stderr)
-        sys.exit(int(e.exit_code))
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        sys.exit(int(ExitCode.INFRASTRUCTURE))
+    run_at_boundary(lambda: app(standalone_mode=True), lambda text: print(text, file=sys.stderr))
 
 
 if __name__ == "__main__":
