@@ -49,6 +49,7 @@ __all__ = [
     "PositiveDistance",
     "Seed",
     "Speed",
+    "SpeedFactor",
     "StickAxis",
     "Throttle",
     "Velocity",
@@ -104,6 +105,8 @@ Degrees = Annotated[float, Field(ge=-360, le=360, allow_inf_nan=False)]
 ObstacleSize = Annotated[float, Field(gt=0, le=OBSTACLE_SIZE_MAX, allow_inf_nan=False)]
 WindSpeed = Annotated[float, Field(ge=0, le=WIND_MAX, allow_inf_nan=False)]
 Speed = Annotated[float, Field(gt=0, le=SPEED_MAX, allow_inf_nan=False)]
+#: how many times real time a simulator runs (PX4_SIM_SPEED_FACTOR)
+SpeedFactor = Annotated[float, Field(gt=0, le=SPEED_FACTOR_MAX, allow_inf_nan=False)]
 #: a velocity component (offboard setpoints), m/s, either sign
 Velocity = Annotated[float, Field(ge=-SPEED_MAX, le=SPEED_MAX, allow_inf_nan=False)]
 #: a yaw rate, deg/s, either sign

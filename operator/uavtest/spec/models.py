@@ -34,6 +34,7 @@ from uavtest.spec.bounds import (
     PositiveDistance,
     Seed,
     Speed,
+    SpeedFactor,
     StickAxis,
     Throttle,
     Velocity,
@@ -120,6 +121,14 @@ class Vehicle(Model):
     )
     params_file: str | None = Field(
         None, description="PX4 params CSV (NAME, value); relative to the test file; inlined by render"
+    )
+    speed_factor: SpeedFactor | None = Field(
+        None,
+        description=(
+            "simulator: px4 only: PX4_SIM_SPEED_FACTOR, times real time; "
+            "default: the engine's measured reliable speed (the built-in simulator runs lockstep, "
+            "as fast as it can)"
+        ),
     )
 
 
