@@ -14,6 +14,7 @@ from rich.console import Console
 
 from uavtest.engine.entry import runner, sitl
 from uavtest.errors import run_at_boundary
+from uavtest.run_options import Engine, ignored_options, ignored_warning
 
 app = typer.Typer(
     name="uavtest",
@@ -73,15 +74,31 @@ def report(
 def run(
     test: Annotated[Path, typer.Argument(help="UavTest YAML, Aerialist or competition test YAML")],
     replicas: Annotated[int | None, typer.Option(help="how many replicas (overrides spec.replicas)")] = None,
-    jobs: Annotated[int | None, typer.Option(help="replicas at once (default: number of cores)")] = None,
-    out: Annotated[Path, typer.Option(help="local artifact folder (store layout)")] = Path("runs"),
+    jobs: Annotated[
+        int | None, typer.Option(help="local: replicas at once (default: number of cores)")
+    ] = None,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            help="artifact folder (store layout); local default runs/. kubernetes: download the run's "
+            "artifacts here (needs UAVTEST_S3_ENDPOINT, _ACCESS_KEY, _SECRET_KEY)"
+        ),
+    ] = None,
     seed: Annotated[int | None, typer.Option(help="base seed; replica i flies with seed + i")] = None,
     replica: Annotated[
-        int | None, typer.Option(help="fly only replica I with its seed (seed + I): an exact replay")
+        int | None, typer.Option(help="local: fly only replica I with its seed (seed + I): an exact replay")
     ] = None,
-    engine: Annotated[str, typer.Option(help="local (this machine) or kubernetes (the cluster)")] = "local",
+    engine: Annotated[
+        Engine, typer.Option(help="local (this machine) or kubernetes (the cluster)", case_sensitive=False)
+    ] = Engine.LOCAL,
     namespace: Annotated[str | None, typer.Option(help="kubernetes: namespace of the UavTest")] = None,
-    wait: Annotated[bool, typer.Option(help="kubernetes: wait until the run is final")] = True,
+    wait: Annotated[
+        bool | None, typer.Option(help="kubernetes: wait until the run is final (default: wait)")
+    ] = None,
+    timeout: Annotated[
+        float | None,
+        typer.Option(help="kubernetes: seconds to wait for the final status; then exit 3, the test runs on"),
+    ] = None,
     json_out: Annotated[bool, typer.Option("--json", help="print the RunSummary as JSON")] = False,
 ) -> None:
     """Fly a test's replicas in simulation and report verdicts, flakiness and the averaged trajectory.
@@ -92,20 +109,51 @@ def run(
 
     Artifacts: OUT/local/<test>/<run-id>/replica-<i>/ and .../aggregate/. Environment:
     UAVTEST_PX4_BIN (PX4 SITL binary for vehicle.simulator px4), UAVTEST_LAUNCH=fork|exec.
+
+    --engine kubernetes creates a new UavTest and follows its status (same exit codes); --out then
+    downloads the run's artifacts to OUT/<namespace>/<test>/<run-id>/ with the operator's S3
+    settings (checked before anything is created: exit 2 without them). A download that fails
+    after the run makes a passing run exit 3; a failing run still exits 1. --timeout running out
+    exits 3 and leaves the UavTest running.
     """
-    if engine == "kubernetes":
-        from uavtest.controller.cluster_run import run_in_cluster
+    given = {
+        "--jobs": jobs,
+        "--replica": replica,
+        "--namespace": namespace,
+        "--wait": wait,
+        "--timeout": timeout,
+        "--out": out,
+        "--json": json_out or None,
+    }
+    waits = wait is not False
+    warning = ignored_warning(engine, ignored_options(engine, given, wait=waits), wait=waits)
+    if warning:
+        err.print(f"[yellow]warning:[/] {warning}", highlight=False, soft_wrap=True)
+    if engine is Engine.KUBERNETES:
+        from uavtest.controller.cluster_run import ClusterRunOptions, run_in_cluster
 
-        raise typer.Exit(run_in_cluster(test, namespace=namespace, wait=wait))
-    if engine != "local":
-        from uavtest.errors import BadInput
-
-        raise BadInput("unknown engine", field="--engine", value=engine, allowed="local, kubernetes")
+        options = ClusterRunOptions(
+            test,
+            namespace=namespace,
+            wait=waits,
+            replicas=replicas,
+            seed=seed,
+            out=out if waits else None,
+            json_out=json_out and waits,
+            timeout=timeout if waits else None,
+        )
+        raise typer.Exit(run_in_cluster(options))
     from uavtest.engine import run_command
 
     raise typer.Exit(
         run_command(
-            test, replicas=replicas, jobs=jobs, out=out, seed=seed, replica=replica, json_out=json_out
+            test,
+            replicas=replicas,
+            jobs=jobs,
+            out=out if out is not None else Path("runs"),
+            seed=seed,
+            replica=replica,
+            json_out=json_out,
         )
     )
 

@@ -8,20 +8,41 @@ test the API server rejects), 3 bench errors only, or the cluster could not be u
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from pydantic import ValidationError
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from uavtest.analysis.flakiness import summarize
+from uavtest.analysis.models import FlightMetrics, ReplicaResult, RunSummary, Verdict
 from uavtest.controller import names
+from uavtest.controller.cluster_download import check_download_settings, download_run, store_root
 from uavtest.controller.status import is_final
-from uavtest.errors import BadInput, ExitCode, InfrastructureError
+from uavtest.errors import BadInput, ExitCode, InfrastructureError, UavTestError
+from uavtest.spec.models import UavTest
+from uavtest.store.layout import SUMMARY, aggregate_key, run_prefix
 
-__all__ = ["exit_code_for", "progress_text", "results_table", "run_in_cluster"]
+__all__ = [
+    "ClusterRunOptions",
+    "apply_overrides",
+    "exit_code_for",
+    "progress_text",
+    "results_table",
+    "run_in_cluster",
+    "still_running_message",
+    "summary_from_status",
+    "with_download",
+]
+
+MAX_REPLICAS = 1000  # spec.replicas' bound
+MAX_SEED = 2**32 - 1  # spec.seed's bound
 
 _WATCH_SECONDS = 60
 
@@ -123,12 +144,16 @@ def _api_message(e: Any) -> str:
         return str(e.reason)
 
 
-def _follow(custom: Any, namespace: str, name: str, console: Console) -> dict[str, Any]:
-    """Watch the UavTest until its status is final; show progress meanwhile; return the status."""
+def _follow(
+    custom: Any, namespace: str, name: str, console: Console, *, timeout: float | None = None
+) -> dict[str, Any]:
+    """Watch the UavTest until its status is final or ``timeout`` seconds pass; show progress
+    meanwhile; return the latest status (``is_final`` tells which)."""
     import kubernetes
     from kubernetes.client.exceptions import ApiException
     from urllib3.exceptions import HTTPError
 
+    deadline = math.inf if timeout is None else time.monotonic() + timeout
     status: dict[str, Any] = {}
     columns = (
         TextColumn("[bold]{task.description}"),
@@ -142,6 +167,9 @@ def _follow(custom: Any, namespace: str, name: str, console: Console) -> dict[st
         resource_version = None
         failures = 0
         while not is_final(status):
+            left = deadline - time.monotonic()
+            if left <= 0:
+                break
             watch = kubernetes.watch.Watch()
             try:
                 for event in watch.stream(
@@ -152,7 +180,7 @@ def _follow(custom: Any, namespace: str, name: str, console: Console) -> dict[st
                     names.PLURAL,
                     field_selector=f"metadata.name={name}",
                     resource_version=resource_version,
-                    timeout_seconds=_WATCH_SECONDS,
+                    timeout_seconds=max(1, min(_WATCH_SECONDS, math.ceil(left))),
                 ):
                     obj = event["object"]
                     if event["type"] == "DELETED":
@@ -167,7 +195,7 @@ def _follow(custom: Any, namespace: str, name: str, console: Console) -> dict[st
                         task, total=status.get("replicas") or None, completed=done, line=progress_text(status)
                     )
                     failures = 0
-                    if is_final(status):
+                    if is_final(status) or time.monotonic() >= deadline:
                         break
             except ApiException as e:
                 if e.status == 410:  # resourceVersion too old: list again
@@ -180,23 +208,148 @@ def _follow(custom: Any, namespace: str, name: str, console: Console) -> dict[st
                     raise InfrastructureError(
                         f"lost the cluster while watching uavtest/{name}: {e}"
                     ) from None
-                time.sleep(min(2.0**failures, 30.0))  # back off before reconnecting the watch
+                time.sleep(min(2.0**failures, 30.0, max(deadline - time.monotonic(), 0.0)))
             finally:
                 watch.stop()
     return status
 
 
-def run_in_cluster(
-    test_path: Path, namespace: str | None = None, wait: bool = True, *, console: Console | None = None
-) -> int:
-    """Create the rendered test as a new UavTest; with ``wait``, follow it and return its exit code."""
+def still_running_message(name: str, namespace: str, status: Mapping[str, Any], timeout: float) -> str:
+    """What to tell a user whose ``--timeout`` ran out: the test goes on, and how to follow it."""
+    where = f"uavtest/{name} -n {namespace}"
+    return (
+        f"gave up waiting after {timeout:g} s (--timeout): uavtest/{name} is still running in namespace "
+        f"{namespace} ({progress_text(status)}); follow it with `kubectl get {where} -w` "
+        f"or `kubectl wait --for=condition=Complete {where}`"
+    )
+
+
+def summary_from_status(name: str, namespace: str, status: Mapping[str, Any]) -> RunSummary:
+    """The local engine's ``--json`` shape (``RunSummary``) from what a final status holds.
+
+    The status keeps each replica's index, seed, verdict, reason and minimum distance (at most
+    ``MAX_STATUS_RESULTS`` of them; the counters always cover every replica); flight times and the
+    unmodelled parameters are only in ``summary.json`` in the store.
+    """
+    results = [
+        ReplicaResult(
+            index=int(r["index"]),
+            seed=int(r["seed"]),
+            verdict=Verdict(r["verdict"]),
+            reason=str(r.get("reason") or ""),
+            metrics=None
+            if r.get("minDistance") is None
+            else FlightMetrics(min_obstacle_distance=float(r["minDistance"])),
+        )
+        for r in status.get("results") or []
+    ]
+    summary = summarize(results, test=name, namespace=namespace, run_id=str(status.get("runId") or ""))
+    counts = {k: int(status.get(k) or 0) for k in ("replicas", "passed", "failed", "errors")}
+    update: dict[str, Any] = {**counts, "warnings": list(status.get("warnings") or [])}
+    if int(status.get("resultsOmitted") or 0):  # stats over a part of the replicas would mislead
+        update["min_obstacle_distance"] = None
+    update["flakiness"] = status.get("flakiness")
+    update["flaky"] = bool(status.get("flaky"))
+    if counts["failed"]:
+        update["verdict"] = Verdict.FAIL
+    elif counts["passed"]:
+        update["verdict"] = Verdict.PASS
+    else:
+        update["verdict"] = Verdict.ERROR
+    return RunSummary.model_validate({**summary.model_dump(), **update})
+
+
+def with_download(run_code: int, download_error: str | None) -> int:
+    """The exit code once ``--out`` was tried: a failing test stays 1; a download that did not
+    happen turns a pass (or bench errors) into 3, since the run did not deliver what was asked."""
+    if download_error is None or run_code in (ExitCode.FAIL, ExitCode.BAD_INPUT):
+        return run_code
+    return int(ExitCode.INFRASTRUCTURE)
+
+
+def apply_overrides(test: UavTest, *, replicas: int | None, seed: int | None) -> UavTest:
+    """``test`` with ``--replicas`` and ``--seed`` in its spec; BadInput naming the option."""
+    update: dict[str, Any] = {}
+    if replicas is not None:
+        if not 1 <= replicas <= MAX_REPLICAS:
+            raise BadInput(
+                "replicas out of range", field="--replicas", value=replicas, allowed=f"1..{MAX_REPLICAS}"
+            )
+        update["replicas"] = replicas
+    if seed is not None:
+        if not 0 <= seed <= MAX_SEED:
+            raise BadInput("seed out of range", field="--seed", value=seed, allowed=f"0..{MAX_SEED}")
+        update["seed"] = seed
+    if not update:
+        return test
+    return test.model_copy(update={"spec": test.spec.model_copy(update=update)})
+
+
+@dataclass(frozen=True)
+class ClusterRunOptions:
+    """``uavtest run --engine kubernetes``'s options."""
+
+    test: Path
+    namespace: str | None = None
+    wait: bool = True
+    replicas: int | None = None
+    seed: int | None = None
+    out: Path | None = None
+    json_out: bool = False
+    timeout: float | None = None
+
+
+def _download(status: Mapping[str, Any], name: str, ns: str, out: Path, console: Console) -> str | None:
+    """Copy the run's artifacts to ``out``; None, or why it did not work (said on stderr)."""
+    from uavtest.store.open import open_store
+
+    run_id = str(status.get("runId") or "")
+    where = (status.get("artifacts") or {}).get("store")
+    try:
+        if not run_id or not where:
+            raise InfrastructureError("the status names no artifacts (no runId / artifacts.store)")
+        store = open_store(store_root(str(where), ns, name, run_id))
+        files = download_run(store, run_prefix(ns, name, run_id), out)
+    except UavTestError as e:
+        console.print(f"[bold red]--out:[/] artifacts not downloaded: {e}", highlight=False, soft_wrap=True)
+        return str(e)
+    folder = out.resolve() / run_prefix(ns, name, run_id)
+    console.print(f"artifacts: {len(files)} files in {folder}", highlight=False)
+    return None
+
+
+def _summary(status: Mapping[str, Any], name: str, ns: str, out: Path | None, downloaded: bool) -> RunSummary:
+    """The run's summary.json when it came home with --out, else what the status holds."""
+    if downloaded and out is not None and status.get("runId"):
+        path = out / aggregate_key(ns, name, str(status["runId"]), SUMMARY)
+        try:
+            return RunSummary.model_validate_json(path.read_bytes())
+        except (OSError, ValidationError):
+            pass
+    return summary_from_status(name, ns, status)
+
+
+def run_in_cluster(opts: ClusterRunOptions, *, console: Console | None = None) -> int:
+    """Create the rendered test as a new UavTest; with ``wait``, follow it and return its exit code.
+
+    ``--out`` is checked before anything is created (exit 2 without the S3 settings); a download
+    that fails afterwards is said on stderr and makes a passing run exit 3 (a failing one stays 1).
+    ``--timeout`` running out exits 3 and leaves the UavTest running.
+    """
+    import os
+
     from uavtest.controller.kube import api_client
     from uavtest.spec.loaders import load_test
     from uavtest.spec.render import render
 
     console = console or Console(stderr=True)
-    manifest = render(load_test(Path(test_path)))
-    ns = _namespace(manifest, namespace)
+    if opts.timeout is not None and not opts.timeout > 0:
+        raise BadInput("must be positive", field="--timeout", value=opts.timeout, allowed="seconds > 0")
+    if opts.out is not None and opts.wait:
+        check_download_settings(os.environ)
+    test = apply_overrides(load_test(Path(opts.test)), replicas=opts.replicas, seed=opts.seed)
+    manifest = render(test)
+    ns = _namespace(manifest, opts.namespace)
     meta = manifest["metadata"]
     base = str(meta.pop("name"))
     meta["generateName"] = f"{base[:52]}-"
@@ -210,13 +363,29 @@ def run_in_cluster(
     with client:
         custom = kubernetes.client.CustomObjectsApi(client)
         name = _create(custom, ns, manifest)
-        console.print(f"created uavtest/{name} in namespace {ns}")
-        if not wait:
+        spec = test.spec
+        console.print(
+            f"created uavtest/{name} in namespace {ns}: {spec.replicas} replica(s), "
+            f"seeds {spec.replica_seed(0)}..{spec.replica_seed(spec.replicas - 1)}",
+            highlight=False,
+        )
+        if not opts.wait:
             return int(ExitCode.PASS)
-        status = _follow(custom, ns, name, console)
+        status = _follow(custom, ns, name, console, timeout=opts.timeout)
+    if not is_final(status):
+        assert opts.timeout is not None
+        console.print(still_running_message(name, ns, status, opts.timeout), highlight=False, soft_wrap=True)
+        return int(ExitCode.INFRASTRUCTURE)
     console.print(results_table(name, status))
-    console.print(status.get("message") or progress_text(status))
-    summary = (status.get("artifacts") or {}).get("summary")
-    if summary:
-        console.print(f"summary: {summary}")
-    return int(exit_code_for(status))
+    console.print(status.get("message") or progress_text(status), highlight=False)
+    summary_uri = (status.get("artifacts") or {}).get("summary")
+    if summary_uri:
+        console.print(f"summary: {summary_uri}", highlight=False)
+    code = int(exit_code_for(status))
+    download_error = None
+    if opts.out is not None and code != ExitCode.BAD_INPUT:
+        download_error = _download(status, name, ns, opts.out, console)
+    if opts.json_out:
+        summary = _summary(status, name, ns, opts.out, download_error is None and opts.out is not None)
+        print(summary.model_dump_json(indent=2))
+    return with_download(code, download_error)
