@@ -1,0 +1,124 @@
+"""`uavtest run --engine kubernetes` as a CI job uses it, on the real cluster with the operator running.
+
+The options it honours: --replicas and --seed reach the UavTest it creates, --json prints the local
+engine's RunSummary shape, --out brings the run's artifacts home from MinIO with the operator's S3
+settings, --timeout gives up with exit 3 and leaves the test running; options it ignores are named.
+Each test creates its own UavTest.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from pyulog import ULog
+
+from e2e.operator_support import Operator, fresh_bucket, running_operator
+from harness.cluster import REPO_ROOT, Cluster
+from harness.minio import MinioServer
+from uavtest.analysis.models import ReplicaResult, RunSummary
+
+pytestmark = [pytest.mark.e2e, pytest.mark.slow]
+
+HOVER = REPO_ROOT / "examples" / "hover.yaml"
+
+
+@pytest.fixture(scope="module")
+def bucket(minio: MinioServer) -> str:
+    return fresh_bucket(minio, "uavtest-cli")
+
+
+@pytest.fixture(scope="module")
+def operator(
+    cluster: Cluster,
+    namespace: str,
+    minio: MinioServer,
+    runner_image: str,
+    bucket: str,
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Iterator[Operator]:
+    with running_operator(
+        cluster, namespace, minio, runner_image, bucket, tmp_path_factory.mktemp("op")
+    ) as op:
+        yield op
+
+
+def run_cli(cluster: Cluster, minio: MinioServer, *args: str) -> subprocess.CompletedProcess[str]:
+    """`uavtest run ... --engine kubernetes` with this machine's view of the operator's store."""
+    env = {
+        **cluster.env(),
+        "UAVTEST_S3_ENDPOINT": minio.endpoint,
+        "UAVTEST_S3_ACCESS_KEY": minio.access_key,
+        "UAVTEST_S3_SECRET_KEY": minio.secret_key,
+        "COLUMNS": "300",
+    }
+    return subprocess.run(
+        [sys.executable, "-m", "uavtest.cli", "run", *args, "--engine", "kubernetes"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=1500,
+    )
+
+
+def test_replicas_seed_out_and_json_are_honoured(
+    cluster: Cluster, namespace: str, operator: Operator, minio: MinioServer, tmp_path: Path
+) -> None:
+    out = tmp_path / "artifacts"
+    done = run_cli(
+        cluster,
+        minio,
+        *(str(HOVER), "--namespace", namespace, "--replicas", "2", "--seed", "7"),
+        *("--out", str(out), "--json", "--timeout", "1200", "--jobs", "4"),
+    )
+    assert done.returncode == 0, (done.stderr[-4000:], operator.log_text()[-3000:])
+    stderr = " ".join(done.stderr.split())
+    assert "ignored with --engine kubernetes: --jobs" in stderr
+    # stdout is the local engine's --json: a RunSummary
+    summary = RunSummary.model_validate_json(done.stdout)
+    name = summary.test
+    assert name.startswith("hover-") and summary.namespace == namespace
+    assert (summary.replicas, summary.passed, summary.failed, summary.errors) == (2, 2, 0, 0)
+    assert [(r.index, r.seed) for r in summary.results] == [(0, 7), (1, 8)]
+    assert summary.flight_time is not None  # the store's summary.json, not only the status
+    # the UavTest it created carries the overrides, and its status the seeds
+    obj = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)
+    assert (obj["spec"]["replicas"], obj["spec"]["seed"]) == (2, 7)
+    assert sorted((r["index"], r["seed"], r["verdict"]) for r in obj["status"]["results"]) == [
+        (0, 7, "pass"),
+        (1, 8, "pass"),
+    ]
+    # --out: the run's artifacts, in the store layout
+    run = out / namespace / name / summary.run_id
+    for i in (0, 1):
+        replica = run / f"replica-{i}"
+        assert {p.name for p in replica.iterdir()} >= {"flight.ulg", "trajectory.csv", "result.json"}
+        result = ReplicaResult.model_validate_json((replica / "result.json").read_text())
+        assert (result.index, result.seed, result.verdict) == (i, 7 + i, "pass")
+        ulog = ULog(str(replica / "flight.ulg"), ["vehicle_local_position"])
+        z = ulog.get_dataset("vehicle_local_position").data["z"]
+        assert z.min() < -4.0  # the log holds the 5 m hover
+        assert len((replica / "trajectory.csv").read_text().splitlines()) > 10
+    assert json.loads((run / "aggregate" / "summary.json").read_text())["passed"] == 2
+
+
+def test_timeout_exits_3_and_leaves_the_test_running(
+    cluster: Cluster, namespace: str, operator: Operator, minio: MinioServer
+) -> None:
+    done = run_cli(cluster, minio, str(HOVER), "--namespace", namespace, "--replicas", "1", "--timeout", "1")
+    try:
+        assert done.returncode == 3, done.stderr[-3000:]
+        stderr = " ".join(done.stderr.split())
+        assert "still running" in stderr and "kubectl get uavtest/" in stderr
+        name = stderr.split("created uavtest/", 1)[1].split()[0]
+        obj = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)  # still there
+        complete = [c for c in obj.get("status", {}).get("conditions", []) if c["type"] == "Complete"]
+        assert not complete or complete[0]["status"] != "True"
+    finally:
+        if done.returncode == 3 and "created uavtest/" in done.stderr:
+            created = done.stderr.split("created uavtest/", 1)[1].split()[0]
+            cluster.kubectl("delete", "uavtest", created, "-n", namespace, "--timeout=120s", check=False)
