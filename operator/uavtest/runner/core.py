@@ -50,6 +50,7 @@ from uavtest.runner.mission import MissionUploader
 from uavtest.runner.monitor import FlightMonitor
 from uavtest.runner.params import ParamSetter
 from uavtest.runner.px4 import AckResult, Autopilot, Cmd, LandedState, MavType, mode_name, result_name
+from uavtest.runner.reboot import JITTER_MS, clock_went_back, reboot_reason
 from uavtest.runner.streams import stream_requests
 from uavtest.spec.models import Command, Fault, Geofence, Home, Obstacle
 
@@ -68,6 +69,11 @@ class Stage(StrEnum):
     SETTLE = "settle"  # the verdict is settled: disarming so the log closes
     LOG = "log"  # downloading the log over MAVLink
     DONE = "done"
+
+
+#: stages in which a vehicle clock that jumps back means the vehicle rebooted (uavtest.runner.reboot):
+#: what the runner set up, flew or is downloading belongs to the previous boot
+_REBOOT_WATCHED = frozenset({Stage.PARAMS, Stage.MISSION, Stage.FLIGHT, Stage.LOG})
 
 
 class Ending(StrEnum):
@@ -171,6 +177,8 @@ class ReplicaCore:
         self._last_hb_ms = -math.inf
         self._settle_tries = 0
         self._armed_at_ms = -math.inf  # vehicle time the vehicle was last seen arming
+        self._disarmed_at_ms = -1  # vehicle time when it was last seen disarming
+        self._last_announce_ms = -1  # the latest lockstep announce (the simulator's exact clock)
 
     # ------------------------------------------------------------------ public
 
@@ -201,6 +209,8 @@ class ReplicaCore:
         if isinstance(msg, GlobalPosition | VehicleTime):
             if msg.time_ms > self.now_ms:
                 self.now_ms = msg.time_ms
+            elif msg.time_ms < self.now_ms - JITTER_MS and self.stage in _REBOOT_WATCHED:
+                return self._rebooted(msg.time_ms, wall)
             if isinstance(msg, GlobalPosition) and not self._have_global:
                 self._have_global = True
                 return self._advance(wall)
@@ -274,6 +284,8 @@ class ReplicaCore:
     def _on_position(self, p: LocalPosition, wall: float) -> list[Outgoing]:
         if p.time_ms > self.now_ms:
             self.now_ms = p.time_ms
+        elif p.time_ms < self.now_ms - JITTER_MS and self.stage in _REBOOT_WATCHED:
+            return self._rebooted(p.time_ms, wall)
         if self.stage is Stage.FLIGHT:
             self.monitor.on_position(p)
             if not self.lockstep:
@@ -295,6 +307,8 @@ class ReplicaCore:
         self.report.vehicle = hb
         if hb.armed and not self.armed:
             self._armed_at_ms = self.now_ms
+        elif self.armed and not hb.armed:
+            self._disarmed_at_ms = self.now_ms
         self.armed = hb.armed
         if hb.armed and self.stage is Stage.FLIGHT:
             self.report.armed_ever = True
@@ -307,6 +321,9 @@ class ReplicaCore:
         if not self.report.lockstep:
             log.info("vehicle runs in lockstep: granting up to %d ms at a time", self.cfg.step_ms)
             self.report.lockstep = True
+        if clock_went_back(self._last_announce_ms, a.time_ms, jitter_ms=0) and self.stage in _REBOOT_WATCHED:
+            return self._rebooted(a.time_ms, wall)
+        self._last_announce_ms = a.time_ms
         if a.time_ms > self.now_ms:
             self.now_ms = a.time_ms
         self._waiting_at = a.time_ms
@@ -328,6 +345,8 @@ class ReplicaCore:
                 if self.armed:
                     self.report.armed_ever = True
                     self._armed_at_ms = self.now_ms
+                else:
+                    self._disarmed_at_ms = self.now_ms
             if not self.lockstep:
                 return self._flight_step(wall)
             return []
@@ -434,12 +453,15 @@ class ReplicaCore:
             )
             return out + self._settle(Ending.COLLISION, wall)
         # landed: disarmed after arming, nothing left to do (a heartbeat from before the arming,
-        # arriving after its ACK, must not end the flight: hence the grace after arming)
+        # arriving after its ACK, must not end the flight: hence the grace after arming). Without
+        # lockstep, only once the vehicle clock moved on after the disarm: a rebooted vehicle is
+        # disarmed too, and its clock starts over (uavtest.runner.reboot)
         if (
             rep.armed_ever
             and not self.armed
             and self.scheduler.idle
             and now - self._armed_at_ms >= ARM_GRACE_MS
+            and (self.lockstep or now > self._disarmed_at_ms)
         ):
             return out + self._settle(Ending.LANDED, wall)
         assert rep.start_ms is not None
@@ -512,6 +534,15 @@ class ReplicaCore:
         else:
             self.stage = Stage.DONE
         return out
+
+    def _rebooted(self, seen_ms: int, wall: float) -> list[Outgoing]:
+        """The vehicle's clock went back: a new boot (the simulator restarted). A bench error."""
+        reason = reboot_reason(self.stage.value, self.now_ms, seen_ms)
+        self._waiting_at = None  # the new boot's announce is not ours to grant
+        if self.stage is Stage.FLIGHT:
+            self.armed = False  # a new boot is disarmed
+            return self._settle(Ending.ERROR, wall, error=reason)
+        return self._fail(reason)
 
     def _fail(self, reason: str) -> list[Outgoing]:
         """A bench fault before or outside the flight: stop here."""
