@@ -214,6 +214,88 @@ def test_the_simulator_dying_mid_flight_is_an_error_not_a_fail(tmp_path: Path) -
     assert replica.artifact("result.json").is_file()
 
 
+REBOOTED = re.compile(
+    r"^the vehicle rebooted mid-flight \(time since boot went from (\d+\.\d) s to (\d+\.\d) s\): "
+    r"simulator restarted; no verdict on a half flight$"
+)
+
+
+def free_running(argv: list[str], speed_factor: float = 3.0) -> list[str]:
+    """The simulator's command line without lockstep: it runs on its own clock, as PX4 SITL does."""
+    return [a for a in argv if a != "--lockstep"] + ["--speed-factor", str(speed_factor)]
+
+
+def restart_simulator_mid_flight(
+    replica: Replica, tmp_path: Path, sim_argv: list[str]
+) -> tuple[int, str, str]:
+    """Fly with a simulator that is SIGKILLed once the vehicle is armed and started again on the
+    same port (a Kubernetes sidecar restarting); returns the runner's exit code, stdout, stderr."""
+    logs = [open(tmp_path / f"sitl-{n}.log", "wb") for n in ("first", "second")]  # noqa: SIM115
+    sims = [subprocess.Popen(sim_argv, stdout=logs[0], stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)]
+    runner = subprocess.Popen(
+        replica.runner_cmd(),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        stdin=subprocess.DEVNULL,
+    )
+    try:
+        assert runner.stderr is not None
+        seen = []
+        for line in runner.stderr:  # wait until the vehicle flies, then crash and restart it
+            seen.append(line)
+            if re.search(r"vehicle \d+/\d+: .*, armed$", line.rstrip()):
+                sims[0].kill()
+                sims[0].wait(10)
+                sims.append(
+                    subprocess.Popen(
+                        sim_argv, stdout=logs[1], stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL
+                    )
+                )
+                break
+        assert len(sims) == 2, "the vehicle never armed:\n" + "".join(seen)[-3000:]
+        out, err = runner.communicate(timeout=RUN_TIMEOUT)
+        return runner.returncode, out, "".join(seen) + err
+    finally:
+        for proc in (runner, *sims):
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(10)
+        for f in logs:
+            f.close()
+
+
+@pytest.mark.parametrize("lockstep", [True, False], ids=["lockstep", "free-running"])
+def test_a_simulator_restarted_mid_flight_is_an_error_not_a_verdict_on_half_a_flight(
+    tmp_path: Path, lockstep: bool
+) -> None:
+    replica = make_replica(tmp_path, SHORT_MISSION)
+    argv = replica.sim_cmd() if lockstep else free_running(replica.sim_cmd())
+    code, out, stderr = restart_simulator_mid_flight(replica, tmp_path, argv)
+    result = ReplicaResult.model_validate_json(out.strip().splitlines()[-1])
+    assert (code, result.verdict) == (3, Verdict.ERROR), f"{result.reason}\n{stderr[-3000:]}"
+    times = REBOOTED.match(result.reason)
+    assert times is not None, result.reason
+    assert float(times[2]) < float(times[1])
+    stored = ReplicaResult.model_validate_json(replica.artifact("result.json").read_text())
+    assert stored.verdict is Verdict.ERROR and stored.reason == result.reason
+
+
+def test_a_free_running_simulator_flight_is_judged_as_usual(tmp_path: Path) -> None:
+    """Without lockstep (as with PX4) a landing still ends the flight and the verdict is given."""
+    replica = make_replica(tmp_path, SHORT_MISSION)
+    log = open(tmp_path / "sitl.log", "wb")  # noqa: SIM115
+    sim = subprocess.Popen(free_running(replica.sim_cmd()), stdout=log, stderr=subprocess.STDOUT)
+    try:
+        code, result, stderr = run_runner(replica)
+    finally:
+        sim.terminate()
+        sim.wait(15)
+        log.close()
+    assert (code, result.verdict) == (0, Verdict.PASS), f"{result.reason}\n{stderr[-3000:]}"
+    assert "lockstep" not in stderr and "rebooted" not in stderr
+
+
 def test_the_same_seed_flies_the_same_trajectory(tmp_path: Path) -> None:
     spec = {**SHORT_MISSION, "world": {"wind": {"meanSpeed": 3, "maxSpeed": 6, "direction": 90}}}
     first = make_replica(tmp_path, spec, name="windy", run_id="a", seed=5)
