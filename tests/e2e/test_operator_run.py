@@ -11,6 +11,7 @@ import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
@@ -61,12 +62,25 @@ def apply_example(cluster: Cluster, namespace: str, name: str) -> str:
     return str(doc["metadata"]["name"])
 
 
-def test_example_flies_in_parallel_pods_and_reports(
-    cluster: Cluster, namespace: str, operator: Operator, minio: MinioServer, bucket: str
-) -> None:
+@pytest.fixture(scope="module")
+def obstacle_pass(cluster: Cluster, namespace: str, operator: Operator) -> tuple[str, dict[str, Any]]:
+    """examples/uavtest.yaml applied as is and flown to the end: (name, final status).
+
+    Created here, not by a test, so each test that reads it runs on its own too."""
     cluster.kubectl("apply", "-n", namespace, "-f", str(EXAMPLES / "uavtest.yaml"))  # the file as is
     name = yaml.safe_load((EXAMPLES / "uavtest.yaml").read_text())["metadata"]["name"]
-    status = wait_complete(cluster, namespace, name)
+    return name, wait_complete(cluster, namespace, name)
+
+
+def test_example_flies_in_parallel_pods_and_reports(
+    cluster: Cluster,
+    namespace: str,
+    operator: Operator,
+    minio: MinioServer,
+    bucket: str,
+    obstacle_pass: tuple[str, dict[str, Any]],
+) -> None:
+    name, status = obstacle_pass
     log = operator.log_text()[-4000:]
     assert status["phase"] == "Succeeded", (status, log)
     assert (status["replicas"], status["passed"], status["failed"], status["errors"]) == (3, 3, 0, 0)
@@ -108,9 +122,10 @@ def test_example_flies_in_parallel_pods_and_reports(
     assert (operator.metric("uavtest_min_obstacle_distance_meters_count", namespace=namespace) or 0) >= 3
 
 
-def test_kubectl_get_shows_the_columns(cluster: Cluster, namespace: str, operator: Operator) -> None:
-    name = "obstacle-pass"
-    wait_complete(cluster, namespace, name)
+def test_kubectl_get_shows_the_columns(
+    cluster: Cluster, namespace: str, obstacle_pass: tuple[str, dict[str, Any]]
+) -> None:
+    name, _ = obstacle_pass
     out = cluster.kubectl("get", "uavt", name, "-n", namespace).splitlines()
     header = out[0].split()
     assert header[:5] == ["NAME", "PHASE", "REPLICAS", "PASSED", "FAILED"]
@@ -156,12 +171,15 @@ def test_a_flaky_example_reports_flakiness_between_0_and_1(
     assert "FlakyTest" in events
 
 
-def test_spec_changes_are_rejected(cluster: Cluster, namespace: str, operator: Operator) -> None:
+def test_spec_changes_are_rejected(
+    cluster: Cluster, namespace: str, obstacle_pass: tuple[str, dict[str, Any]]
+) -> None:
+    name, _ = obstacle_pass
     with pytest.raises(KubectlError) as e:
         cluster.kubectl(
             "patch",
             "uavtest",
-            "obstacle-pass",
+            name,
             "-n",
             namespace,
             "--type=merge",

@@ -16,8 +16,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 from harness.engine_cli import uavtest_run
 from harness.mavlink_client import LockstepClient
 from harness.net import free_udp_port
-from harness.sitl import eventually, running_sitl
-from integration.test_sitl_mavsdk import sitl_port as sitl_port  # the fixture
+from harness.sitl import eventually, free_running_argv, running_sitl
 from uavtest.engine.replica import sitl_command
 from uavtest.sitl.params import encode_param_value
 
@@ -26,6 +25,14 @@ pytestmark = pytest.mark.integration
 INJECT = 420
 GPS, BATTERY, MOTOR, GYRO = 4, 100, 101, 0
 OFF = 1
+
+
+@pytest.fixture
+def sitl_port(tmp_path: Path) -> Iterator[int]:
+    """A free-running `uavtest sitl` (10x) of this test's own, its API link on the returned port."""
+    port = free_udp_port()
+    with running_sitl(free_running_argv(port, tmp_path / "log", 10)):
+        yield port
 
 
 @pytest.fixture
