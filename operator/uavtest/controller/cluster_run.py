@@ -4,6 +4,10 @@ Each call is a new run: the rendered test is created with ``generateName`` (a Ua
 immutable; one object is one run). Progress comes from watching the object's status, and the exit
 code is the local engine's: 0 every replica passed, 1 some replica failed, 2 bad input (also a
 test the API server rejects), 3 bench errors only, or the cluster could not be used.
+
+``--replicas`` / ``--seed`` override the spec before it is created; ``--json`` prints the local
+engine's ``RunSummary``; ``--out`` downloads the run's artifacts (``cluster_download``);
+``--timeout`` gives up waiting (exit 3) and leaves the UavTest running.
 """
 
 from __future__ import annotations
@@ -372,9 +376,9 @@ def run_in_cluster(opts: ClusterRunOptions, *, console: Console | None = None) -
         if not opts.wait:
             return int(ExitCode.PASS)
         status = _follow(custom, ns, name, console, timeout=opts.timeout)
-    if not is_final(status):
-        assert opts.timeout is not None
-        console.print(still_running_message(name, ns, status, opts.timeout), highlight=False, soft_wrap=True)
+    if not is_final(status):  # only when --timeout ran out
+        text = still_running_message(name, ns, status, opts.timeout or 0.0)
+        console.print(text, highlight=False, soft_wrap=True)
         return int(ExitCode.INFRASTRUCTURE)
     console.print(results_table(name, status))
     console.print(status.get("message") or progress_text(status), highlight=False)
