@@ -279,10 +279,15 @@ def _fly(
     cancel: threading.Event,
 ) -> _AttemptEnd:
     """Start runner and simulator, wait for the runner, stop the simulator."""
-    logs = [files.runner_out, files.runner_err, files.sim_err]
-    for path in [*logs, plan.sim_stdout] if plan.sim_stdout else logs:
+    where = f": {' '.join(plan.sim)} in {plan.sim_cwd}" if plan.sim_cwd else ""  # e.g. px4 -i 1 in /tmp/...
+    for path, header in [
+        (files.runner_out, ""),
+        (files.runner_err, ""),
+        (files.sim_err, where),
+        *([(plan.sim_stdout, where)] if plan.sim_stdout else []),
+    ]:
         with path.open("a") as f:
-            f.write(f"--- attempt {attempt} ---\n")
+            f.write(f"--- attempt {attempt}{header} ---\n")
     try:
         for path, text in plan.sim_files.items():
             path.parent.mkdir(parents=True, exist_ok=True)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import io
+from pathlib import Path
+
 import pytest
 
 from uavtest.engine.speed import (
@@ -62,3 +65,17 @@ def test_a_speed_factor_for_the_builtin_simulator_is_ignored_out_loud() -> None:
     assert notice is not None and "speedFactor 10 is ignored" in notice and "lockstep" in notice
     assert speed_factor_notice(spec("builtin")) is None
     assert speed_factor_notice(spec("px4", 10.0)) is None
+
+
+def test_validate_says_the_builtin_simulator_ignores_the_speed_factor(tmp_path: Path) -> None:
+    from uavtest.spec.cli_support import validate_command
+
+    test = tmp_path / "fast.yaml"
+    test.write_text(
+        "apiVersion: uavtest.io/v1alpha1\nkind: UavTest\nmetadata: {name: fast}\nspec:\n"
+        "  vehicle: {simulator: builtin, speedFactor: 10}\n"
+        "  commands:\n    - {at: 1, action: arm}\n"
+    )
+    out = io.StringIO()
+    assert validate_command(test, out=out) == 0
+    assert "warning: vehicle.speedFactor 10 is ignored" in out.getvalue()
