@@ -9,7 +9,7 @@ included) — then the built-in simulator's advantage as ratios. PX4 comes from 
 (or --px4-bin); its speed factor is the test's, else the engine's default for J at a time.
 
     UAVTEST_PX4_BIN=.../build/px4_sitl_default/bin/px4 \\
-        python bench/bench_px4.py [--replicas 4] [--jobs 2] [--speed-factor X] [--test FILE]
+        python bench/bench_px4.py [--replicas 4] [--jobs 2] [--speed-factor X] [--test FILE] [--keep DIR]
 """
 
 from __future__ import annotations
@@ -76,9 +76,10 @@ def render_as(test: Path, into: Path, simulator: str, speed_factor: float | None
     return into
 
 
-def fly(label: str, test: Path, replicas: int, jobs: int, env: dict[str, str]) -> Flown:
+def fly(label: str, test: Path, replicas: int, jobs: int, env: dict[str, str], keep: Path | None) -> Flown:
     with tempfile.TemporaryDirectory(prefix="uavtest-bench-px4-") as tmp:
-        cmd = [sys.executable, "-m", "uavtest.cli", "run", str(test), "--out", tmp, "--json"]
+        out = str(keep) if keep is not None else tmp
+        cmd = [sys.executable, "-m", "uavtest.cli", "run", str(test), "--out", out, "--json"]
         cmd += ["--replicas", str(replicas), "--jobs", str(jobs)]
         start = time.perf_counter()
         proc = subprocess.run(cmd, capture_output=True, text=True, check=False, env=env)
@@ -150,6 +151,7 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=2, help="replicas at once")
     parser.add_argument("--speed-factor", type=float, default=None, help="PX4's; default: the engine's")
     parser.add_argument("--px4-bin", type=Path, default=os.environ.get("UAVTEST_PX4_BIN"))
+    parser.add_argument("--keep", type=Path, default=None, help="keep the runs' artifacts in this folder")
     args = parser.parse_args()
     if not args.test.is_file():
         raise SystemExit(f"{args.test} not found (set UAVTEST_SHARED_DATA to the real data folder)")
@@ -165,7 +167,7 @@ def main() -> None:
         for label, test in [("built-in (lockstep)", builtin), ("PX4 SITL (SIH)", px4)]:
             what = f"{args.replicas} replicas of {args.test.name}, {args.jobs} at a time"
             console.print(f"flying {what}: {label}")
-            runs.append(fly(label, test, args.replicas, args.jobs, env))
+            runs.append(fly(label, test, args.replicas, args.jobs, env, args.keep))
     load_after = os.getloadavg()
     title = (
         f"{args.test.name}: {args.replicas} replicas, {args.jobs} at a time, {os.cpu_count()} cores "
