@@ -324,7 +324,7 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     pace = ""
     if speed is not None:
         chosen = spec.vehicle.speed_factor is not None
-        how = "vehicle.speedFactor" if chosen else f"default for {parallel} at a time on {cores} core(s)"
+        how = "vehicle.speedFactor" if chosen else f"default for {parallel} at a time on {cores} cores"
         pace = f" PX4 at {speed:g}x real time ({how}),"
     console.print(
         f"run [bold]{run_id}[/] of [bold]{name}[/]: {len(indices)} replica(s), {parallel} at a time,{pace} "
