@@ -18,9 +18,14 @@ import pytest
 import yaml
 from pyulog import ULog
 
+from uavtest.analysis.models import Verdict
+from uavtest.engine.ports import PortAllocator, ReplicaPorts
+from uavtest.engine.replica import ProcessPlan, ReplicaJob, plan_processes, run_replica
 from uavtest.engine.speed import available_cores, default_speed_factor
 from uavtest.spec.loaders import load_test
+from uavtest.spec.models import Simulator
 from uavtest.spec.render import render
+from uavtest.store import LocalStore
 
 pytestmark = [pytest.mark.integration, pytest.mark.px4, pytest.mark.slow]
 
@@ -104,3 +109,65 @@ def test_the_tests_speed_factor_reaches_px4(px4_bin: Path, shared_data: Path, tm
     assert "COM_DL_LOSS_T set to 40" in console  # PX4's rcS read PX4_SIM_SPEED_FACTOR=4
     params = ULog(str(replica / "flight.ulg"), ["vehicle_status"]).initial_parameters
     assert params["COM_DL_LOSS_T"] == pytest.approx(40) and params["COM_OBC_LOSS_T"] == pytest.approx(20)
+
+
+def hover_on_px4(repo_root: Path, into: Path) -> Path:
+    text = (repo_root / "examples/hover.yaml").read_text()
+    text = text.replace("  vehicle:\n", "  vehicle:\n    simulator: px4\n    speedFactor: 10\n")
+    into.write_text(text.replace("timeout: 120", "timeout: 300"))
+    return into
+
+
+def fly_one(test: Path, px4: Path, out: Path, plan: object) -> tuple[Any, str]:
+    """One replica through the engine's own process handling, with a changed PX4 start-up."""
+    spec = load_test(test).spec
+    job = ReplicaJob(
+        test_path=test,
+        test_name="hover",
+        run_id="home",
+        index=0,
+        seed=1,
+        store_url=str(out),
+        out_dir=out / "replica-0",
+        simulator=Simulator.PX4,
+        px4_bin=px4,
+        home=spec.world.home,
+        speed_factor=10.0,
+        wall_timeout=300.0,
+        retries=0,
+    )
+    result = run_replica(job, ports=PortAllocator(), store=LocalStore(out), plan=plan)  # type: ignore[arg-type]
+    return result, (out / "replica-0" / "runner.stderr.log").read_text()
+
+
+def test_a_px4_that_starts_elsewhere_is_an_error_naming_both_homes(
+    px4_bin: Path, repo_root: Path, tmp_path: Path
+) -> None:
+    def at_px4s_default_place(job: ReplicaJob, ports: ReplicaPorts, log_dir: Path) -> ProcessPlan:
+        plan = plan_processes(job, ports, log_dir)
+        assert plan.sim_env is not None
+        env = {k: v for k, v in plan.sim_env.items() if k not in ("PX4_HOME_LAT", "PX4_HOME_LON")}
+        return ProcessPlan(plan.sim, plan.runner, plan.sim_cwd, env, plan.sim_files, plan.sim_stdout)
+
+    test = hover_on_px4(repo_root, tmp_path / "hover.yaml")
+    result, log = fly_one(test, px4_bin, tmp_path / "out", at_px4s_default_place)
+    assert result.verdict is Verdict.ERROR, log[-3000:]
+    assert result.reason.startswith("home mismatch: the vehicle reports its home at 45.46"), result.reason
+    assert "the test's world.home is 47.3977420, 8.5455940" in result.reason and "km apart" in result.reason
+    assert "flight starts" not in log  # stopped before anything flew
+
+
+def test_a_px4_on_the_ground_at_another_altitude_flies_with_a_warning(
+    px4_bin: Path, repo_root: Path, tmp_path: Path
+) -> None:
+    def without_the_ground_altitude(job: ReplicaJob, ports: ReplicaPorts, log_dir: Path) -> ProcessPlan:
+        plan = plan_processes(job, ports, log_dir)  # PX4_HOME_LAT/LON only: SIH_LOC_H0 stays 32.34
+        env = {**(plan.sim_env or {}), "PATH": os.environ.get("PATH", "")}
+        return ProcessPlan(plan.sim, plan.runner, plan.sim_cwd, env, {}, plan.sim_stdout)
+
+    test = hover_on_px4(repo_root, tmp_path / "hover.yaml")
+    result, log = fly_one(test, px4_bin, tmp_path / "out", without_the_ground_altitude)
+    assert result.verdict is Verdict.PASS, f"{result.reason}\n{log[-3000:]}"
+    (warning,) = [w for w in result.warnings if w.startswith("home altitude mismatch")]
+    # SIH's default ground, 32.34 m, and the estimator's fraction of a metre above it
+    assert re.search(r"home is at 3[23] m AMSL, the test's world.home at 488 m \(-45[56] m\)", warning)
