@@ -77,3 +77,13 @@ def test_an_altitude_mismatch_is_warned_once_and_the_flight_goes_on() -> None:
     exchange(core, vehicle, [LocalPosition(36_000, 0, 0, 0)], wall=4.0)
     assert core.stage is Stage.FLIGHT and core.report.error is None
     assert len(core.report.warnings) == 1 and "home altitude mismatch" in core.report.warnings[0]
+
+
+def test_home_position_on_the_wire_becomes_an_event() -> None:
+    from pymavlink.dialects.v20 import common as mavlink2
+
+    from uavtest.runner.link import MavlinkCodec
+
+    vehicle = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+    msg = vehicle.home_position_encode(473977430, 85455945, 489011, 0, 0, 0, [1, 0, 0, 0], 0, 0, 0)
+    assert MavlinkCodec().decode(bytes(msg.pack(vehicle))) == [HomePosition(473977430, 85455945, 489011)]
