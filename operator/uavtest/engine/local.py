@@ -28,6 +28,7 @@ from uavtest.analysis.models import ReplicaResult, RunSummary
 from uavtest.engine.launch import ExecLauncher, Launcher, WarmLauncher
 from uavtest.engine.ports import PX4_MAX_INSTANCES, PortAllocator
 from uavtest.engine.replica import DEFAULT_RETRIES, ReplicaJob, run_replica
+from uavtest.engine.speed import available_cores, px4_speed_factor, speed_factor_notice, wall_timeout
 from uavtest.errors import BadInput
 from uavtest.spec.models import Simulator, UavTest
 from uavtest.spec.px4_params import unmodelled_notice, unmodelled_params
@@ -270,8 +271,9 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     ]
     for n in notices:
         console.print(f"[cyan]notice:[/] {n}", highlight=False)
-    for w in simulator_warnings(test.spec):
-        console.print(f"[yellow]warning:[/] {w}", highlight=False)
+    for w in [*simulator_warnings(test.spec), speed_factor_notice(test.spec)]:
+        if w:
+            console.print(f"[yellow]warning:[/] {w}", highlight=False)
     px4_bin = _px4_bin(test, settings, options.test)
 
     replicas = options.replicas if options.replicas is not None else test.spec.replicas
@@ -281,7 +283,8 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
         raise _bad("--seed", "the base seed must not be negative", options.seed, "0 or more")
     if options.replica is not None and not 0 <= options.replica < replicas:
         raise _bad("--replica", "no such replica in this run", options.replica, f"0..{replicas - 1}")
-    jobs_wanted = options.jobs if options.jobs is not None else test.spec.parallelism or os.cpu_count() or 1
+    cores = available_cores()
+    jobs_wanted = options.jobs if options.jobs is not None else test.spec.parallelism or cores
     if jobs_wanted < 1:
         raise _bad("--jobs", "need at least one job", jobs_wanted, "1 or more")
 
@@ -297,7 +300,8 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     run_id = new_run_id()
     out = options.out.resolve()
     store = LocalStore(out)
-    wall_timeout = spec.timeout + 120.0 if px4_bin is None else 1.5 * spec.timeout + 180.0
+    speed = px4_speed_factor(spec, cores=cores, at_once=parallel) if px4_bin is not None else None
+    attempt_wall = wall_timeout(spec.timeout, spec.vehicle.simulator, speed)
     jobs = [
         ReplicaJob(
             test_path=options.test.resolve(),
@@ -311,13 +315,19 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
             simulator=spec.vehicle.simulator,
             px4_bin=px4_bin,
             home=spec.world.home,
-            wall_timeout=wall_timeout,
+            speed_factor=speed,
+            wall_timeout=attempt_wall,
             retries=options.retries,
         )
         for i in indices
     ]
+    pace = ""
+    if speed is not None:
+        chosen = spec.vehicle.speed_factor is not None
+        how = "vehicle.speedFactor" if chosen else f"default for {parallel} at a time on {cores} cores"
+        pace = f" PX4 at {speed:g}x real time ({how}),"
     console.print(
-        f"run [bold]{run_id}[/] of [bold]{name}[/]: {len(indices)} replica(s), {parallel} at a time, "
+        f"run [bold]{run_id}[/] of [bold]{name}[/]: {len(indices)} replica(s), {parallel} at a time,{pace} "
         f"artifacts in {store.root / run_prefix(NAMESPACE, name, run_id)}",
         highlight=False,
     )

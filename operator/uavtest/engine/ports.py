@@ -8,10 +8,18 @@ holds, so concurrent replicas never share a port. Ports come from below the kern
 range, so a simulator binding "any" port (0) cannot take one. A process outside this engine can
 still grab a port between the check and the runner's bind: the runner then fails with a bench
 error and the replica is retried on new ports — a taken port becomes a retry, not a verdict.
+
+A PX4 SITL replica gets an instance number ``i`` instead (``px4 -i i``): PX4 derives all its
+ports from it (``PX4_INSTANCE_PORTS``, from its px4-rc.mavlink) and holds the lock file
+``/tmp/px4_lock-i`` while it runs (another PX4 with the same instance refuses to start: "PX4
+server already running for instance i"). An instance is handed out only when none of its ports
+is bound and its lock is free, so PX4s started by something else on the machine are skipped.
 """
 
 from __future__ import annotations
 
+import fcntl
+import os
 import random
 import socket
 import threading
@@ -27,12 +35,22 @@ __all__ = [
     "PortAllocator",
     "ReplicaPorts",
     "port_is_free",
+    "px4_lock_is_free",
 ]
 
 PX4_API_PORT = 14540  # PX4 SITL instance i sends its onboard (API) link to 14540 + i
 PX4_API_LOCAL_PORT = 14580  # ... from local port 14580 + i
 PX4_GCS_LOCAL_PORT = 18570  # PX4 SITL instance i binds its GCS link to 18570 + i
 PX4_MAX_INSTANCES = 10
+#: the UDP ports PX4 SITL instance i binds, as offsets added to i (PX4 v1.15 px4-rc.mavlink)
+PX4_INSTANCE_PORTS = (
+    PX4_API_LOCAL_PORT,  # onboard (API) link, sends to 14540 + i
+    PX4_GCS_LOCAL_PORT,  # GCS link
+    14280,  # onboard payload link
+    13030,  # gimbal link
+    19450,  # SIH display link (sihsim)
+)
+PX4_LOCK = "/tmp/px4_lock-{}"  # PX4 holds a POSIX lock on it while instance {} runs
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,6 +63,25 @@ class ReplicaPorts:
     api: int
     gcs: int
     instance: int | None = None
+
+
+def px4_lock_is_free(instance: int, template: str = PX4_LOCK) -> bool:
+    """True when no running PX4 holds instance ``instance``'s lock file (fcntl, as PX4 takes it)."""
+    try:
+        fd = os.open(template.format(instance), os.O_RDWR)
+    except FileNotFoundError:
+        return True
+    except OSError:
+        return False  # someone else's lock file: PX4 could not open it either
+    try:
+        fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        return False
+    else:
+        fcntl.lockf(fd, fcntl.LOCK_UN)
+        return True
+    finally:
+        os.close(fd)
 
 
 def port_is_free(port: int, host: str = "127.0.0.1") -> bool:
@@ -71,6 +108,7 @@ class PortAllocator:
         host: str = "127.0.0.1",
         *,
         rng: random.Random | None = None,
+        px4_lock: str = PX4_LOCK,
     ) -> None:
         if not 0 < low < high <= 65535:
             raise ValueError(f"bad port range {low}-{high}")
@@ -78,6 +116,7 @@ class PortAllocator:
         self._lock = threading.Lock()
         self._held: set[int] = set()
         self._instances: set[int] = set()
+        self._px4_lock = px4_lock
         # A random start so two engines on one machine rarely probe the same ports first.
         self._next = (rng or random.SystemRandom()).randrange(low, high)
 
@@ -102,13 +141,13 @@ class PortAllocator:
         for i in range(PX4_MAX_INSTANCES):
             if i in self._instances:
                 continue
-            ports = (PX4_API_PORT + i, PX4_API_LOCAL_PORT + i, PX4_GCS_LOCAL_PORT + i)
-            if all(port_is_free(p, self.host) for p in ports):
+            ports = (PX4_API_PORT + i, *(base + i for base in PX4_INSTANCE_PORTS))
+            if all(port_is_free(p, self.host) for p in ports) and px4_lock_is_free(i, self._px4_lock):
                 self._instances.add(i)
                 return i
         raise InfrastructureError(
             f"no free PX4 SITL instance: ports {PX4_API_PORT}-{PX4_API_PORT + PX4_MAX_INSTANCES - 1} "
-            "are all taken (another PX4 SITL or a ground station running?)"
+            "are all taken or their /tmp/px4_lock-N held (other PX4 SITLs or a ground station running?)"
         )
 
     def allocate(self, *, px4: bool = False) -> ReplicaPorts:

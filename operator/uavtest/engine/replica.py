@@ -30,7 +30,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from uavtest.analysis.models import ReplicaResult, Verdict
 from uavtest.engine.launch import ENTRY_MODULE, ExecLauncher, Launcher, Started
 from uavtest.engine.ports import PortAllocator, ReplicaPorts
-from uavtest.engine.px4home import px4_home_env, sih_latlon_is_int
+from uavtest.engine.px4home import px4_home_env, px4_search_path, px4_start_files, sih_latlon_is_int
+from uavtest.engine.speed import px4_speed_env
 from uavtest.errors import UavTestError
 from uavtest.spec.models import Home, Simulator
 from uavtest.store import ArtifactStore
@@ -75,6 +76,9 @@ class ReplicaJob(BaseModel):
     simulator: Simulator = Simulator.BUILTIN
     px4_bin: Path | None = None
     home: Home = Field(default_factory=Home, description="where PX4 SITL starts (world.home)")
+    speed_factor: float | None = Field(
+        None, gt=0, description="PX4_SIM_SPEED_FACTOR for PX4 SITL (None: PX4's own, real time)"
+    )
     wall_timeout: float = Field(gt=0, description="wall seconds one attempt may take before it is killed")
     retries: int = Field(DEFAULT_RETRIES, ge=0)
     sim_death_grace: float = Field(
@@ -85,12 +89,14 @@ class ReplicaJob(BaseModel):
 
 @dataclass(frozen=True, slots=True)
 class ProcessPlan:
-    """The two command lines of one attempt, and where the simulator runs."""
+    """The two command lines of one attempt, where the simulator runs, and the files it needs."""
 
     sim: list[str]
     runner: list[str]
     sim_cwd: Path | None = None
     sim_env: dict[str, str] | None = None
+    sim_files: dict[Path, str] = field(default_factory=dict)  # written before the simulator starts
+    sim_stdout: Path | None = None  # where the simulator's stdout goes (None: discarded)
 
 
 PlanBuilder = Callable[[ReplicaJob, ReplicaPorts, Path], ProcessPlan]
@@ -150,10 +156,21 @@ def plan_processes(job: ReplicaJob, ports: ReplicaPorts, log_dir: Path) -> Proce
         env = dict(os.environ)
         env.setdefault("PX4_SIM_MODEL", "sihsim_quadx")
         env.update(px4_home_env(job.home, int_latlon=sih_latlon_is_int(job.px4_bin)))
+        env["PATH"] = px4_search_path(log_dir, env.get("PATH", ""))
+        if job.speed_factor is not None:
+            env.update(px4_speed_env(job.speed_factor))
         sim = [str(job.px4_bin), "-i", str(ports.instance), "-d", str(px4_etc_dir(job.px4_bin))]
         # PX4 writes its logs under <working dir>/log/<date>/; the runner collects them there.
         runner[runner.index("--log-dir") + 1] = str(log_dir / "log")
-        return ProcessPlan(sim=sim, runner=runner, sim_cwd=log_dir, sim_env=env)
+        files = px4_start_files(log_dir, job.home)
+        return ProcessPlan(
+            sim=sim,
+            runner=runner,
+            sim_cwd=log_dir,
+            sim_env=env,
+            sim_files=files,
+            sim_stdout=job.out_dir / "sim.stdout.log",  # PX4's console: its start-up and errors
+        )
     sim = sitl_command(job.python, test, job.seed, api_port=ports.api, gcs_port=ports.gcs, log_dir=log_dir)
     return ProcessPlan(sim=sim, runner=runner)
 
@@ -248,6 +265,11 @@ def _tail(path: Path, lines: int = 1) -> str:
     return " | ".join(kept[-lines:])[:300]
 
 
+def _sim_tail(plan: ProcessPlan, files: _AttemptFiles) -> str:
+    """The simulator's last words: its stderr, else its stdout (PX4 prints its errors there)."""
+    return _tail(files.sim_err) or (_tail(plan.sim_stdout) if plan.sim_stdout else "")
+
+
 def _fly(
     plan: ProcessPlan,
     files: _AttemptFiles,
@@ -257,13 +279,27 @@ def _fly(
     cancel: threading.Event,
 ) -> _AttemptEnd:
     """Start runner and simulator, wait for the runner, stop the simulator."""
-    for path in (files.runner_out, files.runner_err, files.sim_err):
+    where = f": {' '.join(plan.sim)} in {plan.sim_cwd}" if plan.sim_cwd else ""  # e.g. px4 -i 1 in /tmp/...
+    for path, header in [
+        (files.runner_out, ""),
+        (files.runner_err, ""),
+        (files.sim_err, where),
+        *([(plan.sim_stdout, where)] if plan.sim_stdout else []),
+    ]:
         with path.open("a") as f:
-            f.write(f"--- attempt {attempt} ---\n")
+            f.write(f"--- attempt {attempt}{header} ---\n")
+    try:
+        for path, text in plan.sim_files.items():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text)
+    except OSError as e:
+        return _AttemptEnd(None, None, note=f"cannot prepare the simulator's working directory: {e}")
     # The runner binds the API port; start it first so the simulator's first packets land.
     runner = launcher.start(plan.runner, stdout=files.runner_out, stderr=files.runner_err)
     try:
-        sim = launcher.start(plan.sim, stdout=None, stderr=files.sim_err, cwd=plan.sim_cwd, env=plan.sim_env)
+        sim = launcher.start(
+            plan.sim, stdout=plan.sim_stdout, stderr=files.sim_err, cwd=plan.sim_cwd, env=plan.sim_env
+        )
     except OSError as e:
         _stop(runner)
         return _AttemptEnd(None, None, note=f"cannot start the simulator {plan.sim[0]}: {e}")
@@ -285,7 +321,7 @@ def _fly(
             if sim_died_at is None and sim.poll() not in (None, 0):
                 sim_died_at = now
             if sim_died_at is not None and now - sim_died_at > job.sim_death_grace:
-                end.note = f"simulator exited with code {sim.poll()}: {_tail(files.sim_err)}"
+                end.note = f"simulator exited with code {sim.poll()}: {_sim_tail(plan, files)}"
                 end.runner_code = _stop(runner)
                 break
             if now > deadline:
@@ -299,7 +335,7 @@ def _fly(
         if end.sim_code is None:
             end.sim = sim  # still running: the caller stops it
         elif end.sim_code != 0:
-            end.sim_note = f"simulator exited with code {end.sim_code}: {_tail(files.sim_err)}"
+            end.sim_note = f"simulator exited with code {end.sim_code}: {_sim_tail(plan, files)}"
     return end
 
 

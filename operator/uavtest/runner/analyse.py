@@ -116,7 +116,7 @@ def analyse(
         )
         return Analysis(result, trajectory)
 
-    warnings = simulator_warnings(spec) + report.delays
+    warnings = simulator_warnings(spec) + report.delays + report.warnings
     for w in warnings:
         log.warning("%s", w)
 

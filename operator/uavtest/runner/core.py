@@ -28,6 +28,7 @@ from uavtest.runner.events import (
     GcsHeartbeat,
     GlobalPosition,
     Heartbeat,
+    HomePosition,
     Incoming,
     LocalPosition,
     LockstepAnnounce,
@@ -45,6 +46,7 @@ from uavtest.runner.events import (
     VehicleTime,
 )
 from uavtest.runner.grants import DEFAULT_STEP_MS, FINE_MS, grant_until
+from uavtest.runner.home import check_home
 from uavtest.runner.logdownload import LogDownloader
 from uavtest.runner.mission import MissionUploader
 from uavtest.runner.monitor import FlightMonitor
@@ -130,6 +132,7 @@ class FlightReport:
     mission_reached: set[int] = field(default_factory=set)
     notes: list[str] = field(default_factory=list)
     delays: list[str] = field(default_factory=list)  # the command schedule shifted (SCHEDULE_SHIFTED)
+    warnings: list[str] = field(default_factory=list)  # other warnings for the result (home altitude)
     status_texts: list[str] = field(default_factory=list)
     status_log: list[tuple[int, int, str]] = field(default_factory=list)  # (vehicle ms, severity, text)
     refusals: list[Refusal] = field(default_factory=list)  # commands the vehicle refused
@@ -179,6 +182,8 @@ class ReplicaCore:
         self._armed_at_ms = -math.inf  # vehicle time the vehicle was last seen arming
         self._disarmed_at_ms = -1  # vehicle time when it was last seen disarming
         self._last_announce_ms = -1  # the latest lockstep announce (the simulator's exact clock)
+        self._home_checked = False  # a HOME_POSITION has been compared with the test's home
+        self._home_warned = False
 
     # ------------------------------------------------------------------ public
 
@@ -217,6 +222,8 @@ class ReplicaCore:
             return []
         if isinstance(msg, CommandAck):
             return self._on_command_ack(msg, wall)
+        if isinstance(msg, HomePosition):
+            return self._on_home(msg, wall)
         if isinstance(msg, ExtendedSysState):
             self.landed_state = msg.landed_state
             return []
@@ -316,6 +323,28 @@ class ReplicaCore:
             self._deadline = wall + self.cfg.position_timeout_s
             return [GcsHeartbeat(), *self._advance(wall)]
         return self._advance(wall)
+
+    def _on_home(self, home: HomePosition, wall: float) -> list[Outgoing]:
+        """The start-up home against the test's: every HOME_POSITION until the vehicle arms, and
+        the first one in any case (the home moves only with the vehicle once it has armed)."""
+        if self._home_checked and self.report.armed_ever:
+            return []
+        first = not self._home_checked
+        self._home_checked = True
+        check = check_home(self.cfg.home, home)
+        if first:
+            log.info("vehicle home %.1f m from world.home, %+.1f m up", check.horizontal_m, check.vertical_m)
+        if check.warning and not self._home_warned:
+            self._home_warned = True
+            log.warning("%s", check.warning)
+            self.report.warnings.append(check.warning)
+        if check.error is None:
+            return []
+        if self.stage is Stage.FLIGHT:
+            return self._settle(Ending.ERROR, wall, error=check.error)
+        if self.stage in (Stage.CONNECT, Stage.PARAMS, Stage.MISSION):
+            return self._fail(check.error)
+        return []
 
     def _on_announce(self, a: LockstepAnnounce, wall: float) -> list[Outgoing]:
         if not self.report.lockstep:

@@ -20,6 +20,7 @@ __all__ = [
     "GcsHeartbeat",
     "GlobalPosition",
     "Heartbeat",
+    "HomePosition",
     "Incoming",
     "LocalPosition",
     "LockstepAnnounce",
@@ -86,6 +87,15 @@ class GlobalPosition:
     lat: int
     lon: int
     relative_alt_mm: int
+
+
+@dataclass(frozen=True, slots=True)
+class HomePosition:
+    """HOME_POSITION: where the vehicle's home is, degE7 and altitude AMSL in mm."""
+
+    lat: int
+    lon: int
+    alt_mm: int
 
 
 @dataclass(frozen=True, slots=True)
@@ -183,6 +193,7 @@ Incoming = (
     Heartbeat
     | LocalPosition
     | GlobalPosition
+    | HomePosition
     | VehicleTime
     | ParamValue
     | MissionRequest

@@ -3,10 +3,10 @@
 PX4 streams its ONBOARD link's defaults from boot (~300 messages per second: ATTITUDE at 100 Hz,
 HIGHRES_IMU and GLOBAL_POSITION_INT at 50 Hz, ODOMETRY at 30 Hz, ...). The runner reads only
 heartbeats, SYS_STATUS, SYSTEM_TIME, LOCAL_POSITION_NED, GLOBAL_POSITION_INT (for the fix),
-EXTENDED_SYS_STATE, STATUSTEXT and the answers of the protocols it runs; the flight itself is
-judged from the ULog. So once connected it stops the streams it never reads and slows
-GLOBAL_POSITION_INT, on PX4 and on the built-in simulator alike: less work for both, the same
-flight. The requests are sent once and not awaited: a vehicle that refuses one (an older PX4
+HOME_POSITION (0.5 Hz, checked against world.home), EXTENDED_SYS_STATE, STATUSTEXT and the
+answers of the protocols it runs; the flight itself is judged from the ULog. So once connected
+it stops the streams it never reads and slows GLOBAL_POSITION_INT, on PX4 and on the built-in
+simulator alike: less work for both, the same flight. The requests are sent once and not awaited: a vehicle that refuses one (an older PX4
 without that stream) flies the same, only with more telemetry.
 """
 

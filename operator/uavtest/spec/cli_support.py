@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 from typing import TextIO
 
+from uavtest.engine.speed import speed_factor_notice
 from uavtest.errors import ExitCode
 from uavtest.spec.commands import resolved_commands
 from uavtest.spec.crd import crd_yaml
@@ -52,6 +53,9 @@ def validate_command(test: Path, *, out: TextIO | None = None) -> int:
         print(f"warning: {notice}", file=out)
     if any(c.action == CommandAction.YAW for c in commands):
         print(f"warning: {YAW_NOTICE}", file=out)
+    speed = speed_factor_notice(spec)
+    if speed:
+        print(f"warning: {speed}", file=out)
     return int(ExitCode.PASS)
 
 

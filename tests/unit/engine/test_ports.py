@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import random
 import socket
+import subprocess
+import sys
 import threading
+from pathlib import Path
 
 import pytest
 
-from uavtest.engine.ports import PortAllocator, port_is_free
+from uavtest.engine.ports import PortAllocator, port_is_free, px4_lock_is_free
 from uavtest.errors import InfrastructureError
 
 
@@ -55,3 +58,31 @@ def test_released_ports_return_to_the_pool_and_exhaustion_is_a_bench_error() -> 
     assert alloc.held == frozenset()
     again = alloc.allocate()
     assert {again.api, again.gcs} == {low, low + 1}
+
+
+LOCK_HOLDER = r"""
+import fcntl, os, sys, time
+fd = os.open(sys.argv[1], os.O_RDWR | os.O_CREAT, 0o644)
+fcntl.lockf(fd, fcntl.LOCK_EX)  # as a running PX4 holds /tmp/px4_lock-<instance>
+print("locked", flush=True)
+time.sleep(60)
+"""
+
+
+def test_a_px4_instance_whose_lock_another_process_holds_is_skipped(tmp_path: Path) -> None:
+    template = str(tmp_path / "px4_lock-{}")
+    holder = subprocess.Popen(
+        [sys.executable, "-c", LOCK_HOLDER, template.format(0)], stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert holder.stdout is not None and holder.stdout.readline().strip() == "locked"
+        assert not px4_lock_is_free(0, template)
+        assert px4_lock_is_free(1, template)  # no lock file yet: free
+        alloc = PortAllocator(px4_lock=template)
+        ports = alloc.allocate(px4=True)
+        assert ports.instance != 0
+        assert ports.api == 14540 + (ports.instance or 0)
+    finally:
+        holder.kill()
+        holder.wait()
+    assert px4_lock_is_free(0, template)  # the lock dies with its process

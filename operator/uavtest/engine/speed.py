@@ -1,0 +1,96 @@
+"""How fast PX4 SITL runs: ``vehicle.speedFactor`` as ``PX4_SIM_SPEED_FACTOR``, and its default.
+
+PX4 SITL free-runs: its clock goes ``PX4_SIM_SPEED_FACTOR`` times the wall clock (PX4's rcS also
+stretches its link-loss timeouts by that factor). Every replica then needs that much CPU, all the
+time; when it cannot get it, PX4's estimator and controllers miss their deadlines and flights
+end ``error`` or fail. So the default is the fastest that was reliable on a measured machine,
+scaled by the CPU one replica gets (cores / replicas flown at once):
+
+    default = clamp(floor(SPEED_PER_CORE * cores / at_once), 1, DEFAULT_SPEED_MAX)
+
+Measured on a 2-core machine (competition mission2, 4 replicas, 2 at a time, one core each):
+speed factor 10 flew 4/4 pass (168 flights/h); 20 flew 96 flights/h with one error, CPU-bound.
+Hence ``SPEED_PER_CORE`` = 10. ``DEFAULT_SPEED_MAX`` = 20 because a single PX4 SIH reached at
+most ~18x real time there, whatever the factor asked.
+
+The built-in simulator runs in lockstep, as fast as the runner grants time: a speed factor means
+nothing to it, and is ignored with a warning (``speed_factor_notice``).
+
+Wall-clock budgets (``wall_timeout``) are derived from vehicle seconds (``spec.timeout``) and the
+speed factor, with room for PX4 falling behind the factor when the machine is busy.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from uavtest.spec.models import Simulator, UavTestSpec
+
+__all__ = [
+    "DEFAULT_SPEED_MAX",
+    "PX4_BOOT_S",
+    "SPEED_PER_CORE",
+    "available_cores",
+    "default_speed_factor",
+    "px4_speed_env",
+    "px4_speed_factor",
+    "speed_factor_notice",
+    "wall_timeout",
+]
+
+SPEED_PER_CORE = 10.0  # reliable PX4 SIH speed factor per core a replica gets (measured, see above)
+DEFAULT_SPEED_MAX = 20.0  # a single PX4 SIH did not run faster than ~18x on the measured machine
+PX4_BOOT_S = 60.0  # vehicle seconds before PX4 flies: ~36 s to ready-to-arm, 10 s arm settle, margin
+PX4_SLOWDOWN = 2.0  # PX4 may reach only half its speed factor on a busy machine
+START_S = 120.0  # wall seconds for start-up, aggregation of a replica's log, stopping
+BUILTIN_START_S = 120.0
+
+
+def available_cores() -> int:
+    """CPUs this process may run on (its affinity), at least 1."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def default_speed_factor(cores: int, at_once: int) -> float:
+    """The default PX4 speed factor for ``at_once`` replicas sharing ``cores`` CPUs. Pure."""
+    if cores < 1 or at_once < 1:
+        raise ValueError(f"cores and replicas at once must be >= 1, got {cores} and {at_once}")
+    return float(min(DEFAULT_SPEED_MAX, max(1, math.floor(SPEED_PER_CORE * cores / at_once))))
+
+
+def px4_speed_factor(spec: UavTestSpec, *, cores: int, at_once: int) -> float:
+    """``vehicle.speedFactor`` when given, else the default for this machine and parallelism."""
+    chosen = spec.vehicle.speed_factor
+    return float(chosen) if chosen is not None else default_speed_factor(cores, at_once)
+
+
+def px4_speed_env(speed_factor: float) -> dict[str, str]:
+    """PX4 SITL's environment for a speed factor (read by its rcS and its simulator clock)."""
+    return {"PX4_SIM_SPEED_FACTOR": f"{speed_factor:g}"}
+
+
+def wall_timeout(timeout_s: float, simulator: Simulator, speed_factor: float | None) -> float:
+    """Wall seconds one attempt of a replica may take; ``timeout_s`` is vehicle (flight) time.
+
+    The built-in simulator runs in lockstep, far faster than real time: its budget is the
+    flight time as if it ran in real time. PX4 runs at ``speed_factor`` (1 when None): boot,
+    arm settle and flight at half that speed, plus start-up.
+    """
+    if simulator is not Simulator.PX4:
+        return timeout_s + BUILTIN_START_S
+    speed = speed_factor or 1.0
+    return PX4_SLOWDOWN * (timeout_s + PX4_BOOT_S) / speed + START_S
+
+
+def speed_factor_notice(spec: UavTestSpec) -> str | None:
+    """A warning when ``vehicle.speedFactor`` is given but the simulator does not use it."""
+    if spec.vehicle.speed_factor is None or spec.vehicle.simulator is Simulator.PX4:
+        return None
+    return (
+        f"vehicle.speedFactor {spec.vehicle.speed_factor:g} is ignored: the built-in simulator runs "
+        "in lockstep, as fast as the runner grants time (speedFactor applies to simulator: px4)"
+    )
