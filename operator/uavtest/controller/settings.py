@@ -13,6 +13,8 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from uavtest.spec.bounds import SpeedFactor
+
 __all__ = ["OperatorSettings", "Resources"]
 
 
@@ -49,6 +51,11 @@ class OperatorSettings(BaseSettings):
         None, description="PX4 SITL image for vehicle.simulator: px4 (a test's vehicle.image wins)"
     )
     px4_args: list[str] = Field(default_factory=list, description="arguments for the PX4 SITL container")
+    px4_speed_factor: SpeedFactor | None = Field(
+        None,
+        description="PX4_SIM_SPEED_FACTOR of PX4 sidecars when a test sets no vehicle.speedFactor "
+        "(None: PX4's own, real time)",
+    )
 
     store_url: str = Field("s3://uavtest", description="s3://bucket[/prefix] the replicas write to")
     pod_s3_endpoint: str | None = Field(
@@ -70,6 +77,10 @@ class OperatorSettings(BaseSettings):
 
     sitl_resources: Resources = Field(default_factory=Resources)
     runner_resources: Resources = Field(default_factory=Resources)
+    px4_resources: Resources = Field(
+        default_factory=lambda: Resources(cpu_request="250m", memory_request="64Mi", memory_limit="512Mi"),
+        description="the PX4 SITL sidecar (measured: ~9 MB RSS; ~10 % of a core per 1x speed factor)",
+    )
 
     aggregate_retry_seconds: float = Field(
         30.0, gt=0, description="how often aggregation is retried while the store is unreachable"
