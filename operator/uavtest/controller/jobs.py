@@ -11,6 +11,13 @@ The Job, and why it looks like this:
   ``restartPolicy: Always``) and the runner as the main container; they talk MAVLink over the
   pod's localhost and share the ULog directory (an emptyDir). When the runner exits, the kubelet
   stops the sidecar (SIGTERM: the sim closes its log) and the pod ends with the runner's code.
+- ``vehicle.simulator: px4``: the sidecar is a PX4 SITL image (``vehicle.image``, else the
+  operator's ``px4_image``) with its own entrypoint, working in the shared emptyDir (workingDir,
+  ``PX4_WORKDIR``), so PX4's ``log/<date>/<time>.ulg`` lands where the runner looks; an image
+  that writes elsewhere gets its log downloaded over MAVLink by the runner. The test's home and
+  speed factor go in as PX4's own variables (``PX4_HOME_LAT/LON/ALT`` in degrees,
+  ``PX4_SIM_SPEED_FACTOR``); parameters are set by the runner over MAVLink. ``/tmp`` is an
+  emptyDir (PX4's lock file and socket); resources are ``px4_resources``.
 - Runner exit codes (``uavtest runner``): 0 pass, 1 fail, 2 bad input, 3 bench error. Only bench
   errors may be retried, so ``podFailurePolicy`` says:
 
