@@ -76,6 +76,19 @@ def test_px4_runs_unprivileged_with_its_own_resources() -> None:
     assert "workingDir" not in builtin
 
 
+def test_one_px4_resource_set_by_environment_keeps_the_other_px4_defaults(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setenv("UAVTEST_OPERATOR_PX4_RESOURCES__CPU_REQUEST", "1")
+    monkeypatch.setenv("UAVTEST_OPERATOR_PX4_SPEED_FACTOR", "3")
+    settings = OperatorSettings()
+    assert settings.px4_resources.manifest() == {
+        "requests": {"cpu": "1", "memory": "64Mi"},
+        "limits": {"memory": "512Mi"},
+    }
+    assert settings.px4_speed_factor == 3
+
+
 def test_the_operators_px4_image_and_args_serve_tests_that_name_none() -> None:
     body = uavtest_body(vehicle={"simulator": "px4"})
     sitl = container(make_job(body, px4_image="registry.example/px4-sitl:1.15", px4_args=["-s", "x"]), "sitl")
