@@ -25,7 +25,16 @@ from e2e.operator_support import Operator, fresh_bucket, running_operator, store
 from harness.cluster import CACHE_DIR, REPO_ROOT, Cluster
 from harness.minio import MinioServer
 
-pytestmark = [pytest.mark.e2e, pytest.mark.px4, pytest.mark.slow]
+PX4_BIN = os.environ.get("UAVTEST_PX4_BIN", "")
+# a skip mark, not a fixture's pytest.skip: it holds before the session starts a cluster
+pytestmark = [
+    pytest.mark.e2e,
+    pytest.mark.px4,
+    pytest.mark.slow,
+    pytest.mark.skipif(
+        not PX4_BIN or not Path(PX4_BIN).is_file(), reason="UAVTEST_PX4_BIN does not name a PX4 SITL binary"
+    ),
+]
 
 PX4_IMAGE = "uavtest-px4:e2e"
 BUILD_SCRIPT = REPO_ROOT / "runner-image" / "build-px4-image.sh"
@@ -38,10 +47,7 @@ SPEED_FACTOR = 2
 
 @pytest.fixture(scope="module")
 def px4_build() -> Path:
-    value = os.environ.get("UAVTEST_PX4_BIN")
-    if not value or not Path(value).is_file():
-        pytest.skip("UAVTEST_PX4_BIN does not name a PX4 SITL binary")
-    return Path(value).resolve().parent.parent  # build/px4_sitl_default
+    return Path(PX4_BIN).resolve().parent.parent  # build/px4_sitl_default
 
 
 @pytest.fixture(scope="module")
