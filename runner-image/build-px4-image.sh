@@ -10,7 +10,7 @@
 #   layer 3  the build: /opt/px4/bin, /opt/px4/etc, /opt/px4/parameters.json — made every time
 # PX4's binary links libstdc++/libm/libc only: build it on Debian bookworm (or older glibc) to match.
 # Writes OUT.tar (default $UAVTEST_CACHE/share/uavtest-px4-dev.tar), a self-contained archive for
-# `ctr -n k8s.io images import`, `docker load`, `kind load image-archive`, `skopeo copy oci-archive:...`.
+# `ctr -n k8s.io images import`, `kind load image-archive` or `skopeo copy oci-archive:OUT.tar ...`.
 # --thin writes the PX4 layer only, with OUT.tar.base naming the cached base image archive (layers 1+2)
 # to import first (tests/cluster/import-image.sh does both). Image name default uavtest-px4:dev.
 # Needs root (debootstrap, mount, chroot), apt-get (downloads bc's .deb), python3.
