@@ -18,78 +18,14 @@ FULL=0; ARGS=()
 for a in "$@"; do if [ "$a" = --full ]; then FULL=1; else ARGS+=("$a"); fi; done
 REPO=$(cd "${ARGS[0]:?usage: build-runner-image.sh REPO_ROOT [OUT.tar] [--full]}" && pwd)
 OUT=${ARGS[1]:-$SHARE/uavtest-runner-dev.tar}
-[ "$(id -u)" = 0 ] || { log "build-runner-image.sh needs root (debootstrap, mount, chroot)"; exit 1; }
-IMG=$CACHE/image; mkdir -p "$IMG" "$SHARE" "$(dirname "$OUT")"
-exec 9>"$IMG/.lock"; flock 9   # one image build at a time per cache
-
-SUITE=bookworm
-BASE_PACKAGES="python3,python3-venv,ca-certificates"
-BASE_RECIPE=1   # bump when the way the base layer is made changes
+IMAGE_PATH=/opt/uavtest/bin:/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
+image_work_begin   # IMG, WORK, the lock; key, chroot_run, overlay_mount from lib.sh
+mkdir -p "$(dirname "$OUT")"
 PYVER=3.11      # bookworm's python3
 VENV=/opt/uavtest
-IMAGE_PATH=$VENV/bin:/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin
 
-WORK=$(mktemp -d "$IMG/tmp.XXXXXX")
-cleanup() {   # unmount whatever is still mounted under WORK (overlays; debootstrap's proc/sys if it died)
-  grep -F " $WORK/" /proc/self/mountinfo | awk '{print $5}' | sort -r | while read -r m; do umount -l "$m"; done || true
-  rm -rf "$WORK"
-}
-trap cleanup EXIT
-trap 'exit 130' INT TERM
-key() { printf '%s\n' "$@" | sha256sum | cut -c1-16; }
-
-# chroot_run ROOT CMD... : run CMD in ROOT with a clean environment (no host PIP_* settings leak in)
-chroot_run() {
-  local root=$1; shift
-  env -i PATH="$IMAGE_PATH" HOME=/root LANG=C.UTF-8 PIP_DISABLE_PIP_VERSION_CHECK=1 chroot "$root" "$@"
-}
-
-# overlay_mount LOWER(S) UPPER WORK MERGED
-overlay_mount() {
-  mkdir -p "$2" "$3" "$4"
-  mount -t overlay overlay -o "lowerdir=$1,upperdir=$2,workdir=$3" "$4"
-}
-overlay_umount() { umount "$1"; }
-
-# ---------------------------------------------------------------- layer 1: debootstrap
-t0=$(now)
-KA=$(key "$SUITE" "$BASE_PACKAGES" "$BASE_RECIPE")
-A=$IMG/base-$KA
-if [ -f "$A/layer.tar" ] && [ -d "$A/rootfs/usr" ]; then
-  log "image layer 1 (debian $SUITE + python3): cached ($(since "$t0")s)"
-else
-  DB=$CACHE/deb/debootstrap
-  if [ ! -x "$DB/x/usr/sbin/debootstrap" ]; then
-    rm -rf "$DB"; mkdir -p "$DB/pkgs" "$DB/x"
-    (cd "$DB/pkgs" && { apt-get download debootstrap >/dev/null 2>&1 || { apt-get update -qq >/dev/null; apt-get download debootstrap >/dev/null; }; })
-    dpkg-deb -x "$DB"/pkgs/debootstrap_*.deb "$DB/x"
-  fi
-  if ! command -v wget >/dev/null; then   # debootstrap downloads with wget
-    log "installing wget (debootstrap needs it)"
-    apt-get install -y -qq --no-install-recommends wget >/dev/null 2>&1 || \
-      { apt-get update -qq >/dev/null; apt-get install -y -qq --no-install-recommends wget >/dev/null; }
-  fi
-  MIRROR=${UAVTEST_DEBIAN_MIRROR:-}
-  if [ -z "$MIRROR" ]; then   # the host's own Debian mirror, else deb.debian.org
-    MIRROR=$(cat /etc/apt/sources.list.d/*.sources 2>/dev/null | awk '/^URIs:/ {print $2}' | grep -v security | head -n1 || true)
-    [ -n "$MIRROR" ] || MIRROR=$(awk '/^deb / && !/security/ {print $2; exit}' /etc/apt/sources.list 2>/dev/null || true)
-    MIRROR=${MIRROR:-http://deb.debian.org/debian}
-  fi
-  KEYRING=/usr/share/keyrings/debian-archive-keyring.gpg
-  GPG=(--keyring="$KEYRING"); [ -f "$KEYRING" ] || GPG=(--no-check-gpg)
-  rm -rf "$A"; mkdir -p "$WORK/base"
-  DEBOOTSTRAP_DIR=$DB/x/usr/share/debootstrap "$DB/x/usr/sbin/debootstrap" --variant=minbase \
-    --include="$BASE_PACKAGES" "${GPG[@]}" "$SUITE" "$WORK/base/rootfs" "$MIRROR" > "$WORK/debootstrap.log" 2>&1 \
-    || { tail -n 30 "$WORK/debootstrap.log" >&2; cat "$WORK/base/rootfs/debootstrap/debootstrap.log" 2>/dev/null | tail -n 30 >&2; exit 1; }
-  R=$WORK/base/rootfs
-  rm -rf "$R"/var/cache/apt/archives/*.deb "$R"/var/lib/apt/lists/* "$R"/usr/share/doc/* "$R"/usr/share/man/* \
-         "$R"/usr/share/info/* "$R"/var/log/*.log "$R"/var/cache/debconf/*-old "$R"/var/lib/dpkg/*-old
-  : > "$R/etc/resolv.conf"
-  echo uavtest-runner > "$R/etc/hostname"
-  python3 "$HERE/mkoci.py" layer --empty dev --empty proc --empty sys --empty run "$R" "$WORK/base/layer.tar" >/dev/null
-  mv "$WORK/base" "$A"
-  log "image layer 1 (debian $SUITE + python3): built in $(since "$t0")s"
-fi
+# ---------------------------------------------------------------- layer 1: debootstrap (lib.sh)
+debian_base_layer   # sets KA, A
 
 # ---------------------------------------------------------------- layer 2: dependencies in a venv
 t0=$(now)
@@ -173,9 +109,4 @@ else
 fi
 log "image layer 3 (project wheel) + archive: built in $(since "$t0")s -> $OUT ($(du -h "$OUT" | cut -f1))"
 
-# cache hygiene: layers whose key no checkout used for 3 days go (a dependency change makes a new layer 2)
-touch "$A/.used" "$B/.used" "$BE/.used"
-for d in "$IMG"/base-* "$IMG"/deps-* "$IMG"/buildenv-*; do
-  [ -d "$d" ] && [ -z "$(find "$d/.used" -mtime -3 2>/dev/null)" ] && rm -rf "$d"
-done
-true
+image_cache_hygiene "$A" "$B" "$BE"

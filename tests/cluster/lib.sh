@@ -72,3 +72,93 @@ load_ports() {
   KUBELET_PORT=${KUBELET_PORT:-10250}; KUBELET_HEALTHZ_PORT=${KUBELET_HEALTHZ_PORT:-10248}
   KWOK_PORT=${KWOK_PORT:-10247}
 }
+
+# ------------------------------------------------------------------ image building (no Docker)
+# Shared by build-runner-image.sh and runner-image/build-px4-image.sh. image_work_begin sets IMG (the
+# layer cache), takes its lock and makes WORK (removed, with whatever is mounted under it, on exit).
+IMAGE_SUITE=bookworm
+IMAGE_BASE_PACKAGES="python3,python3-venv,ca-certificates"
+IMAGE_BASE_RECIPE=1   # bump when the way the base layer is made changes
+
+image_work_begin() {
+  [ "$(id -u)" = 0 ] || { log "$(basename "$0") needs root (debootstrap, mount, chroot)"; exit 1; }
+  IMG=$CACHE/image; mkdir -p "$IMG" "$SHARE"
+  exec 9>"$IMG/.lock"; flock 9   # one image build at a time per cache
+  WORK=$(mktemp -d "$IMG/tmp.XXXXXX")
+  trap image_work_cleanup EXIT
+  trap 'exit 130' INT TERM
+}
+image_work_cleanup() {   # unmount whatever is still mounted under WORK (overlays; debootstrap's proc/sys if it died)
+  grep -F " $WORK/" /proc/self/mountinfo | awk '{print $5}' | sort -r | while read -r m; do umount -l "$m"; done || true
+  rm -rf "$WORK"
+}
+key() { printf '%s\n' "$@" | sha256sum | cut -c1-16; }
+
+# chroot_run ROOT CMD... : run CMD in ROOT with a clean environment (no host PIP_* settings leak in)
+chroot_run() {
+  local root=$1; shift
+  env -i PATH="${IMAGE_PATH:-/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin}" HOME=/root LANG=C.UTF-8 \
+    PIP_DISABLE_PIP_VERSION_CHECK=1 chroot "$root" "$@"
+}
+
+# overlay_mount LOWER(S) UPPER WORK MERGED
+overlay_mount() {
+  mkdir -p "$2" "$3" "$4"
+  mount -t overlay overlay -o "lowerdir=$1,upperdir=$2,workdir=$3" "$4"
+}
+overlay_umount() { umount "$1"; }
+
+# debian_base_layer : layer 1 of every image the suite builds: Debian bookworm `debootstrap --variant=minbase`
+# + python3, python3-venv, ca-certificates, cached as $IMG/base-<key>/{rootfs,layer.tar}. Sets KA (its key)
+# and A (its folder). Needs image_work_begin first.
+debian_base_layer() {
+  local t0 DB MIRROR KEYRING GPG R
+  t0=$(now)
+  KA=$(key "$IMAGE_SUITE" "$IMAGE_BASE_PACKAGES" "$IMAGE_BASE_RECIPE")
+  A=$IMG/base-$KA
+  if [ -f "$A/layer.tar" ] && [ -d "$A/rootfs/usr" ]; then
+    log "image layer 1 (debian $IMAGE_SUITE + python3): cached ($(since "$t0")s)"
+    return 0
+  fi
+  DB=$CACHE/deb/debootstrap
+  if [ ! -x "$DB/x/usr/sbin/debootstrap" ]; then
+    rm -rf "$DB"; mkdir -p "$DB/pkgs" "$DB/x"
+    (cd "$DB/pkgs" && { apt-get download debootstrap >/dev/null 2>&1 || { apt-get update -qq >/dev/null; apt-get download debootstrap >/dev/null; }; })
+    dpkg-deb -x "$DB"/pkgs/debootstrap_*.deb "$DB/x"
+  fi
+  if ! command -v wget >/dev/null; then   # debootstrap downloads with wget
+    log "installing wget (debootstrap needs it)"
+    apt-get install -y -qq --no-install-recommends wget >/dev/null 2>&1 || \
+      { apt-get update -qq >/dev/null; apt-get install -y -qq --no-install-recommends wget >/dev/null; }
+  fi
+  MIRROR=${UAVTEST_DEBIAN_MIRROR:-}
+  if [ -z "$MIRROR" ]; then   # the host's own Debian mirror, else deb.debian.org
+    MIRROR=$(cat /etc/apt/sources.list.d/*.sources 2>/dev/null | awk '/^URIs:/ {print $2}' | grep -v security | head -n1 || true)
+    [ -n "$MIRROR" ] || MIRROR=$(awk '/^deb / && !/security/ {print $2; exit}' /etc/apt/sources.list 2>/dev/null || true)
+    MIRROR=${MIRROR:-http://deb.debian.org/debian}
+  fi
+  KEYRING=/usr/share/keyrings/debian-archive-keyring.gpg
+  GPG=(--keyring="$KEYRING"); [ -f "$KEYRING" ] || GPG=(--no-check-gpg)
+  rm -rf "$A"; mkdir -p "$WORK/base"
+  DEBOOTSTRAP_DIR=$DB/x/usr/share/debootstrap "$DB/x/usr/sbin/debootstrap" --variant=minbase \
+    --include="$IMAGE_BASE_PACKAGES" "${GPG[@]}" "$IMAGE_SUITE" "$WORK/base/rootfs" "$MIRROR" > "$WORK/debootstrap.log" 2>&1 \
+    || { tail -n 30 "$WORK/debootstrap.log" >&2; tail -n 30 "$WORK/base/rootfs/debootstrap/debootstrap.log" 2>/dev/null >&2; exit 1; }
+  R=$WORK/base/rootfs
+  rm -rf "$R"/var/cache/apt/archives/*.deb "$R"/var/lib/apt/lists/* "$R"/usr/share/doc/* "$R"/usr/share/man/* \
+         "$R"/usr/share/info/* "$R"/var/log/*.log "$R"/var/cache/debconf/*-old "$R"/var/lib/dpkg/*-old
+  : > "$R/etc/resolv.conf"
+  echo uavtest-runner > "$R/etc/hostname"
+  python3 "$HERE/mkoci.py" layer --empty dev --empty proc --empty sys --empty run "$R" "$WORK/base/layer.tar" >/dev/null
+  mv "$WORK/base" "$A"
+  log "image layer 1 (debian $IMAGE_SUITE + python3): built in $(since "$t0")s"
+}
+
+# image_cache_hygiene DIR... : mark DIRs used; layers no build used for 3 days go
+image_cache_hygiene() {
+  local d
+  for d in "$@"; do touch "$d/.used"; done
+  for d in "$IMG"/base-* "$IMG"/deps-* "$IMG"/buildenv-* "$IMG"/px4extra-*; do
+    [ -d "$d" ] && [ -z "$(find "$d/.used" -mtime -3 2>/dev/null)" ] && rm -rf "$d"
+  done
+  true
+}

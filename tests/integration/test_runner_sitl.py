@@ -347,3 +347,24 @@ def test_without_a_shared_log_folder_the_runner_downloads_the_log_over_mavlink(t
     written = sorted(replica.log_dir.glob("*.ulg"))
     assert len(written) == 1
     assert replica.artifact("flight.ulg").read_bytes() == written[0].read_bytes()
+
+
+def test_a_shared_folder_without_a_log_falls_back_to_the_mavlink_download(tmp_path: Path) -> None:
+    # as against a PX4 image that writes its log in its own working directory, not in the pod's
+    # shared emptyDir: the runner finds nothing there and downloads the log from the vehicle
+    replica = make_replica(tmp_path, SHORT_MISSION, name="fallback")
+    elsewhere = tmp_path / "shared-but-empty"
+    elsewhere.mkdir()
+    cmd = replica.runner_cmd()
+    cmd[cmd.index("--log-dir") + 1] = str(elsewhere)
+    with simulator(replica, tmp_path):
+        done = subprocess.run(
+            cmd, capture_output=True, text=True, timeout=RUN_TIMEOUT, stdin=subprocess.DEVNULL
+        )
+    result = ReplicaResult.model_validate_json(done.stdout.strip().splitlines()[-1])
+    assert result.verdict is Verdict.PASS, f"{result.reason}\n{done.stderr[-3000:]}"
+    assert "downloading it from the vehicle over MAVLink" in done.stderr
+    written = sorted(replica.log_dir.glob("*.ulg"))
+    assert len(written) == 1
+    assert replica.artifact("flight.ulg").read_bytes() == written[0].read_bytes()
+    assert list(elsewhere.iterdir()) == []

@@ -11,6 +11,13 @@ The Job, and why it looks like this:
   ``restartPolicy: Always``) and the runner as the main container; they talk MAVLink over the
   pod's localhost and share the ULog directory (an emptyDir). When the runner exits, the kubelet
   stops the sidecar (SIGTERM: the sim closes its log) and the pod ends with the runner's code.
+- ``vehicle.simulator: px4``: the sidecar is a PX4 SITL image (``vehicle.image``, else the
+  operator's ``px4_image``) with its own entrypoint, working in the shared emptyDir (workingDir,
+  ``PX4_WORKDIR``), so PX4's ``log/<date>/<time>.ulg`` lands where the runner looks; an image
+  that writes elsewhere gets its log downloaded over MAVLink by the runner. The test's home and
+  speed factor go in as PX4's own variables (``PX4_HOME_LAT/LON/ALT`` in degrees,
+  ``PX4_SIM_SPEED_FACTOR``); parameters are set by the runner over MAVLink. ``/tmp`` is an
+  emptyDir (PX4's lock file and socket); resources are ``px4_resources``.
 - Runner exit codes (``uavtest runner``): 0 pass, 1 fail, 2 bad input, 3 bench error. Only bench
   errors may be retried, so ``podFailurePolicy`` says:
 
@@ -42,6 +49,7 @@ import yaml
 
 from uavtest.controller import names
 from uavtest.controller.settings import OperatorSettings
+from uavtest.engine.px4home import px4_home_env
 from uavtest.errors import BadInput
 from uavtest.spec.models import Metadata, Simulator, UavTest, UavTestSpec
 from uavtest.store.settings import S3Settings
@@ -203,6 +211,17 @@ _RUNNER_SCRIPT = (
 )
 
 
+def _px4_env(spec: UavTestSpec, settings: OperatorSettings) -> list[dict[str, Any]]:
+    """PX4's own variables: the test's home (degrees; the uavtest PX4 image converts them for a
+    build that takes degrees * 1e7) and the speed factor (the test's, else the operator's)."""
+    home = px4_home_env(spec.world.home, int_latlon=False)
+    env = [{"name": k, "value": v} for k, v in home.items()]
+    speed = spec.vehicle.speed_factor or settings.px4_speed_factor
+    if speed is not None:
+        env.append({"name": "PX4_SIM_SPEED_FACTOR", "value": f"{speed:g}"})
+    return env
+
+
 def _sitl_container(test: UavTest, settings: OperatorSettings) -> dict[str, Any]:
     spec = test.spec
     base_env = [{"name": "UAVTEST_BASE_SEED", "value": str(spec.seed or 0)}, *(dict(e) for e in _COMMON_ENV)]
@@ -224,6 +243,11 @@ def _sitl_container(test: UavTest, settings: OperatorSettings) -> dict[str, Any]
                 allowed="a PX4 SITL image here, or the operator's UAVTEST_OPERATOR_PX4_IMAGE",
             )
         container["image"] = image
+        # PX4 works in the shared emptyDir: its parameters, dataman and log/<date>/<time>.ulg,
+        # which the runner collects from there (or, when the image writes elsewhere, downloads)
+        container["workingDir"] = LOG_DIR
+        container["env"] = [*base_env, {"name": "PX4_WORKDIR", "value": LOG_DIR}, *_px4_env(spec, settings)]
+        container["resources"] = settings.px4_resources.manifest()
         if settings.px4_args:
             container["args"] = list(settings.px4_args)
         return container

@@ -13,7 +13,9 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-__all__ = ["OperatorSettings", "Resources"]
+from uavtest.spec.bounds import SpeedFactor
+
+__all__ = ["OperatorSettings", "Px4Resources", "Resources"]
 
 
 class Resources(BaseModel):
@@ -36,6 +38,15 @@ class Resources(BaseModel):
         return out
 
 
+class Px4Resources(Resources):
+    """The PX4 SITL sidecar's: measured on PX4 v1.15 SIH flying, ~9 MB RSS and ~10 % of a core per
+    1x speed factor (no CPU limit: a throttled PX4 falls behind its own clock)."""
+
+    cpu_request: str = "250m"
+    memory_request: str = "64Mi"
+    memory_limit: str | None = "512Mi"
+
+
 class OperatorSettings(BaseSettings):
     """How the operator builds replica Jobs and where their artifacts go."""
 
@@ -49,6 +60,11 @@ class OperatorSettings(BaseSettings):
         None, description="PX4 SITL image for vehicle.simulator: px4 (a test's vehicle.image wins)"
     )
     px4_args: list[str] = Field(default_factory=list, description="arguments for the PX4 SITL container")
+    px4_speed_factor: SpeedFactor | None = Field(
+        None,
+        description="PX4_SIM_SPEED_FACTOR of PX4 sidecars when a test sets no vehicle.speedFactor "
+        "(None: PX4's own, real time)",
+    )
 
     store_url: str = Field("s3://uavtest", description="s3://bucket[/prefix] the replicas write to")
     pod_s3_endpoint: str | None = Field(
@@ -70,6 +86,7 @@ class OperatorSettings(BaseSettings):
 
     sitl_resources: Resources = Field(default_factory=Resources)
     runner_resources: Resources = Field(default_factory=Resources)
+    px4_resources: Px4Resources = Field(default_factory=Px4Resources, description="the PX4 SITL sidecar")
 
     aggregate_retry_seconds: float = Field(
         30.0, gt=0, description="how often aggregation is retried while the store is unreachable"

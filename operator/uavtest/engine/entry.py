@@ -43,7 +43,11 @@ def runner(
         str | None, typer.Option(help="test name in the store (default: metadata.name)")
     ] = None,
     log_dir: Annotated[
-        Path | None, typer.Option(help="where the simulator writes its .ulg (else: MAVLink log download)")
+        Path | None,
+        typer.Option(
+            help="where the simulator writes its .ulg (else, or when it holds none after the flight: "
+            "MAVLink log download)"
+        ),
     ] = None,
     timeout: Annotated[float | None, typer.Option(help="vehicle seconds the flight may take")] = None,
     connect_timeout: Annotated[float, typer.Option(help="wall seconds to wait for a heartbeat")] = 30.0,

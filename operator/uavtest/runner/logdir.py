@@ -13,7 +13,7 @@ from pathlib import Path
 
 from uavtest.errors import InfrastructureError
 
-__all__ = ["LogMissing", "wait_for_log"]
+__all__ = ["LogMissing", "has_log", "wait_for_log"]
 
 
 class LogMissing(InfrastructureError):
@@ -37,6 +37,20 @@ def _newest(log_dir: Path, since: float) -> tuple[Path, int] | None:
         if best is None or (st[0], p.name) > best[:2]:
             best = (st[0], p.name, p, st[1])
     return (best[2], best[3]) if best else None
+
+
+def has_log(log_dir: Path, *, since: float = 0.0) -> bool:
+    """Whether anything under ``log_dir`` is (becoming) a flight log: a ``.ulg`` or ``.ulg.part``
+    modified at or after ``since``. PX4 creates its log at arming, the built-in simulator its
+    ``.part`` at start: after a flight that armed, False means the log went somewhere else."""
+    if not log_dir.is_dir():
+        return False
+    for pattern in ("*.ulg", "*.ulg.part"):
+        for p in log_dir.rglob(pattern):
+            st = _stat(p)
+            if st is not None and st[0] >= since:
+                return True
+    return False
 
 
 def wait_for_log(

@@ -1,8 +1,12 @@
-"""Stage 6 over MAVLink: download the newest log from the vehicle (pure state machine).
+"""Stage 6 over MAVLink: download the newest log from the vehicle (pure state machines).
 
 LOG_REQUEST_LIST → LOG_ENTRY (one per log) → LOG_REQUEST_DATA for the newest → LOG_DATA chunks of
 up to 90 bytes → LOG_REQUEST_END. Chunks lost on the way are asked for again from the first hole;
 a download that stops making progress for ``attempts`` retries is a bench error.
+
+``LogDownloader`` runs inside the runner core's log stage; ``LogFetch`` runs it on its own after
+the flight (the runner's fallback when the shared log directory got no log: a PX4 image that
+writes its log somewhere the runner cannot see): it waits for the vehicle's heartbeat first.
 """
 
 from __future__ import annotations
@@ -11,6 +15,8 @@ import logging
 import math
 
 from uavtest.runner.events import (
+    GcsHeartbeat,
+    Heartbeat,
     Incoming,
     LogData,
     LogEntry,
@@ -19,12 +25,22 @@ from uavtest.runner.events import (
     LogRequestList,
     Outgoing,
 )
+from uavtest.runner.px4 import Autopilot, MavType
 
-__all__ = ["CHUNK", "LogDownloader"]
+__all__ = ["CHUNK", "LogDownloader", "LogFetch"]
 
 log = logging.getLogger(__name__)
 
 CHUNK = 90  # LOG_DATA payload
+
+
+def _is_vehicle(msg: Incoming) -> bool:
+    """A heartbeat of the vehicle, not of a ground station or companion computer."""
+    return (
+        isinstance(msg, Heartbeat)
+        and msg.autopilot != Autopilot.INVALID
+        and msg.type not in (MavType.GCS, MavType.ONBOARD_CONTROLLER)
+    )
 
 
 class LogDownloader:
@@ -119,3 +135,58 @@ class LogDownloader:
             return [LogRequestList()]
         first = self._have.index(0)
         return [LogRequestData(self.log_id, first * CHUNK, self.size - first * CHUNK)]
+
+
+class LogFetch:
+    """Download the newest log from a vehicle that is already running: ``done`` with ``data``, or ``error``.
+
+    Waits up to ``connect_timeout_s`` (wall) for a vehicle heartbeat, then downloads; a GCS
+    heartbeat goes out every second meanwhile (PX4 keeps a link with a ground station alive)."""
+
+    def __init__(self, *, connect_timeout_s: float = 10.0, retry_s: float = 1.0, attempts: int = 10) -> None:
+        self.connect_timeout_s = connect_timeout_s
+        self.downloader = LogDownloader(retry_s=retry_s, attempts=attempts)
+        self.connected = False
+        self._connect_deadline = math.inf
+        self._next_heartbeat = 0.0
+
+    @property
+    def done(self) -> bool:
+        return self.downloader.done
+
+    @property
+    def data(self) -> bytes | None:
+        return self.downloader.data
+
+    @property
+    def error(self) -> str | None:
+        return self.downloader.error
+
+    def start(self, wall: float) -> list[Outgoing]:
+        self._connect_deadline = wall + self.connect_timeout_s
+        return []
+
+    def handle(self, msg: Incoming, wall: float) -> list[Outgoing]:
+        if self.done:
+            return []
+        if not self.connected:
+            if not _is_vehicle(msg):
+                return []
+            self.connected = True
+            self._next_heartbeat = wall + 1.0
+            return [GcsHeartbeat(), *self.downloader.start(wall)]
+        return self.downloader.handle(msg, wall)
+
+    def tick(self, wall: float) -> list[Outgoing]:
+        if self.done:
+            return []
+        if not self.connected:
+            if wall >= self._connect_deadline:
+                self.downloader.done = True
+                self.downloader.error = f"no vehicle heartbeat within {self.connect_timeout_s:g} s"
+            return []
+        out: list[Outgoing] = []
+        if wall >= self._next_heartbeat:
+            self._next_heartbeat = wall + 1.0
+            out.append(GcsHeartbeat())
+        return out + self.downloader.tick(wall)

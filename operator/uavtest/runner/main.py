@@ -25,7 +25,8 @@ from uavtest.runner.artifacts import ReplicaPlace, store_artifacts
 from uavtest.runner.core import Ending, FlightReport, ReplicaCore
 from uavtest.runner.grants import DEFAULT_STEP_MS
 from uavtest.runner.link import UdpLink
-from uavtest.runner.logdir import wait_for_log
+from uavtest.runner.logdir import has_log, wait_for_log
+from uavtest.runner.logdownload import LogFetch
 from uavtest.runner.plan import plan_flight
 from uavtest.runner.session import drive
 from uavtest.spec.models import UavTestSpec
@@ -88,20 +89,49 @@ def injected_faults(report: FlightReport) -> list[InjectedFault]:
 
 
 def _collect_log(opts: RunnerOptions, report: FlightReport, since: float) -> tuple[Path | None, str | None]:
-    """Stage 6: the flight log's path, or why there is none."""
+    """Stage 6: the flight log's path, or why there is none.
+
+    From the vehicle (downloaded during the session), else from the shared ``--log-dir``; a
+    vehicle that armed but left nothing there (a PX4 image writing its log elsewhere) gets its
+    log downloaded over MAVLink instead."""
     if report.log_data is not None:
-        tmp = tempfile.NamedTemporaryFile(prefix="uavtest-", suffix=".ulg", delete=False)  # noqa: SIM115
-        with tmp:
-            tmp.write(report.log_data)
-        return Path(tmp.name), None
+        return _temp_log(report.log_data), None
     if opts.log_dir is None:
         return None, report.error or "log missing: no --log-dir and no log downloaded from the vehicle"
     if report.ending in (Ending.ERROR, Ending.REFUSED) and not report.armed_ever:
         return None, "log missing: the vehicle never armed, so its log never closed"
+    if report.armed_ever and report.ending is not Ending.ERROR and not has_log(opts.log_dir, since=since):
+        log.info("no log in %s: downloading it from the vehicle over MAVLink", opts.log_dir)
+        data, error = _download_log(opts)
+        if data is not None:
+            report.log_data = data  # like a log downloaded during the session: a temporary file
+            return _temp_log(data), None
+        return None, f"log missing: none in {opts.log_dir}, and the MAVLink download failed: {error}"
     try:
         return wait_for_log(opts.log_dir, since=since, timeout_s=opts.log_timeout), None
     except InfrastructureError as e:
         return None, str(e)
+
+
+def _temp_log(data: bytes) -> Path:
+    tmp = tempfile.NamedTemporaryFile(prefix="uavtest-", suffix=".ulg", delete=False)  # noqa: SIM115
+    with tmp:
+        tmp.write(data)
+    return Path(tmp.name)
+
+
+def _download_log(opts: RunnerOptions, *, tick_s: float = 0.02) -> tuple[bytes | None, str | None]:
+    """The vehicle's newest log over MAVLink, after the flight (I/O edge of ``LogFetch``)."""
+    fetch = LogFetch(connect_timeout_s=opts.connect_timeout)
+    with UdpLink(opts.connect) as link:
+        link.send(fetch.start(time.monotonic()))
+        while not fetch.done:
+            events = link.receive(tick_s)
+            now = time.monotonic()
+            for event in events:
+                link.send(fetch.handle(event, now))
+            link.send(fetch.tick(now))
+    return fetch.data, fetch.error
 
 
 def _fly(opts: RunnerOptions, spec: UavTestSpec) -> FlightReport:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from uavtest.runner.logdir import LogMissing, wait_for_log
+from uavtest.runner.logdir import LogMissing, has_log, wait_for_log
 
 
 def test_the_newest_finished_log_is_taken(tmp_path: Path) -> None:
@@ -78,3 +78,15 @@ def test_a_px4_log_that_keeps_growing_is_not_taken(tmp_path: Path) -> None:
     finally:
         stop.set()
         t.join()
+
+
+def test_has_log_sees_a_log_being_written_and_ignores_older_ones(tmp_path: Path) -> None:
+    assert not has_log(tmp_path / "missing")
+    assert not has_log(tmp_path)
+    old = tmp_path / "log" / "2026-01-01" / "old.ulg"
+    old.parent.mkdir(parents=True)
+    old.write_bytes(b"ULog")
+    os.utime(old, (1000.0, 1000.0))
+    assert has_log(tmp_path) and not has_log(tmp_path, since=2000.0)
+    (tmp_path / "flight.ulg.part").write_bytes(b"ULog")  # the built-in simulator's, still open
+    assert has_log(tmp_path, since=2000.0)

@@ -4,8 +4,16 @@ from __future__ import annotations
 
 import os
 
-from uavtest.runner.events import LogData, LogEntry, LogRequestData, LogRequestEnd, LogRequestList
-from uavtest.runner.logdownload import CHUNK, LogDownloader
+from uavtest.runner.events import (
+    GcsHeartbeat,
+    Heartbeat,
+    LogData,
+    LogEntry,
+    LogRequestData,
+    LogRequestEnd,
+    LogRequestList,
+)
+from uavtest.runner.logdownload import CHUNK, LogDownloader, LogFetch
 
 LOG = os.urandom(1000)  # 12 chunks, the last one short
 
@@ -56,3 +64,33 @@ def test_a_vehicle_without_logs_or_that_stops_sending_is_an_error() -> None:
     d.tick(1.2)
     d.tick(2.3)
     assert d.done and d.error is not None and "stalled" in d.error and d.data is None
+
+
+def vehicle_heartbeat(type_: int = 2, autopilot: int = 12) -> Heartbeat:
+    return Heartbeat(
+        sysid=1, compid=1, type=type_, autopilot=autopilot, base_mode=0, custom_mode=0, system_status=3
+    )
+
+
+def test_after_the_flight_the_fetch_waits_for_the_vehicle_then_downloads() -> None:
+    f = LogFetch(connect_timeout_s=5.0)
+    assert f.start(0.0) == []
+    assert f.handle(vehicle_heartbeat(type_=6, autopilot=8), 0.1) == []  # another ground station
+    assert f.tick(1.0) == []  # nothing is sent before the vehicle spoke
+    assert f.handle(vehicle_heartbeat(), 1.2) == [GcsHeartbeat(), LogRequestList()]
+    assert f.handle(LogEntry(0, 1, 0, len(LOG)), 1.3) == [LogRequestData(0, 0, 0xFFFFFFFF)]
+    assert f.tick(2.25) == [GcsHeartbeat()]  # the link stays alive while the download runs
+    out = []
+    for c in chunks(0):
+        out += f.handle(c, 2.4)
+    assert out == [LogRequestEnd()]
+    assert f.done and f.error is None and f.data == LOG
+
+
+def test_a_fetch_without_a_vehicle_ends_in_an_error() -> None:
+    f = LogFetch(connect_timeout_s=5.0)
+    f.start(0.0)
+    assert f.tick(4.9) == [] and not f.done
+    f.tick(5.0)
+    assert f.done and f.data is None
+    assert f.error == "no vehicle heartbeat within 5 s"
