@@ -230,7 +230,7 @@ def ensure_upload_secret(
     meta = rt.kube.secret_metadata(namespace, name)
     if meta is None:
         policy = _sign_upload_policy(rt, test, run_id, window)
-        if rt.kube.create_secret(namespace, build_upload_secret(test, run_id, policy, body)):
+        if rt.kube.create_secret(namespace, build_upload_secret(test, run_id, policy, dict(body))):
             until = policy.expires.isoformat()
             logger.info(f"created Secret {name}: uploads to {policy.where()} until {until}")
             if window.clamped:
