@@ -15,6 +15,7 @@ log line or an error message.
 from __future__ import annotations
 
 import logging
+import secrets
 import xml.etree.ElementTree as ET
 from datetime import datetime
 from typing import NoReturn
@@ -131,6 +132,25 @@ def _error_of(status: int, body: bytes) -> PostRefused:
     return PostRefused(status, code, message)
 
 
+def _form(
+    policy: UploadPolicy, object_name: str, data: bytes, content_type: str
+) -> tuple[list[bytes | memoryview], str]:
+    """The multipart/form-data body as parts (the file's bytes are not copied) and its Content-Type."""
+    boundary = secrets.token_hex(16)
+    fields = [*policy.fields.items(), ("key", object_name), ("Content-Type", content_type)]
+    head = "".join(
+        f'--{boundary}\r\nContent-Disposition: form-data; name="{name}"\r\n\r\n{value}\r\n'
+        for name, value in fields
+    )
+    filename = object_name.rsplit("/", 1)[-1] or "file"
+    head += (
+        f'--{boundary}\r\nContent-Disposition: form-data; name="file"; filename="{filename}"\r\n'
+        f"Content-Type: {content_type}\r\n\r\n"
+    )  # the file goes last: S3 ignores fields after it
+    tail = f"\r\n--{boundary}--\r\n"
+    return [head.encode(), memoryview(data), tail.encode()], f"multipart/form-data; boundary={boundary}"
+
+
 def post_object(
     http: urllib3.PoolManager,
     policy: UploadPolicy,
@@ -140,14 +160,19 @@ def post_object(
 ) -> None:
     """One POST of ``data`` as ``object_name`` under ``policy``; raises PostRefused on an S3 error.
 
-    No check of the name here: the server enforces the policy (a test proves it does).
+    No check of the name here: the server enforces the policy (a test proves it does). The body is
+    sent in parts with its length, so a large flight log is not copied in memory.
     """
-    form: list[tuple[str, str | tuple[str, bytes, str]]] = list(policy.fields.items())
-    form += [("key", object_name), ("Content-Type", content_type)]
-    form.append(("file", (object_name.rsplit("/", 1)[-1] or "file", data, content_type)))  # file last
-    body, form_type = urllib3.encode_multipart_formdata(form)
+    if any(c in object_name for c in '"\r\n') or any(c in content_type for c in '"\r\n'):
+        raise BadInput("not usable in an upload form", field="key", value=object_name)
+    parts, form_type = _form(policy, object_name, data, content_type)
+    length = sum(len(p) for p in parts)
     response = http.request(
-        "POST", policy.url, body=body, headers={"Content-Type": form_type}, preload_content=True
+        "POST",
+        policy.url,
+        body=parts,
+        headers={"Content-Type": form_type, "Content-Length": str(length)},
+        preload_content=True,
     )
     if not 200 <= response.status < 300:
         raise _error_of(response.status, response.data)
