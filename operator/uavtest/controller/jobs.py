@@ -80,6 +80,7 @@ __all__ = [
     "upload_prefix",
     "upload_secret_name",
     "upload_window",
+    "uses_upload_policy",
 ]
 
 RUNNER_EXIT_PASS = 0
@@ -338,7 +339,15 @@ def upload_expires(meta: Mapping[str, Any]) -> datetime | None:
     return when if when is not None and when.tzinfo is not None else None
 
 
-def _upload_env(test: UavTest, run_id: str) -> list[dict[str, Any]]:
+def uses_upload_policy(settings: OperatorSettings) -> bool:
+    """Whether replicas upload through a per-run policy: an ``s3://`` store (a ``file://`` store is
+    for runs without a real node, e.g. the scale bench on kwok: its pods never run)."""
+    return settings.store_url.startswith("s3://")
+
+
+def _upload_env(test: UavTest, run_id: str, settings: OperatorSettings) -> list[dict[str, Any]]:
+    if not uses_upload_policy(settings):
+        return []
     ref = {"name": upload_secret_name(test.metadata.name, run_id), "key": names.UPLOAD_POLICY_KEY}
     return [{"name": POLICY_ENV, "valueFrom": {"secretKeyRef": ref}}]
 
@@ -369,7 +378,7 @@ def _runner_container(test: UavTest, run_id: str, settings: OperatorSettings) ->
         "env": [
             {"name": "UAVTEST_BASE_SEED", "value": str(spec.seed or 0)},
             *(dict(e) for e in _COMMON_ENV),
-            *_upload_env(test, run_id),
+            *_upload_env(test, run_id, settings),
         ],
         "resources": settings.runner_resources.manifest(),
         "securityContext": _container_security(settings),

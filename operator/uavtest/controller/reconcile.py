@@ -35,6 +35,7 @@ from uavtest.controller.jobs import (
     upload_prefix,
     upload_secret_name,
     upload_window,
+    uses_upload_policy,
 )
 from uavtest.controller.kube import Kube
 from uavtest.controller.metrics import Metrics
@@ -195,12 +196,7 @@ def _sign_upload_policy(rt: Runtime, test: UavTest, run_id: str, window: UploadW
     from uavtest.store.s3 import S3Store
 
     store = rt.store()
-    if not isinstance(store, S3Store):
-        raise kopf.TemporaryError(
-            f"replica pods upload to S3, but the operator's store is {rt.config.store_url}: set "
-            "UAVTEST_OPERATOR_STORE_URL to s3://BUCKET[/PREFIX]",
-            delay=60,
-        )
+    assert isinstance(store, S3Store), "uses_upload_policy: an s3:// store"
     try:
         return store.upload_policy(
             upload_prefix(test, run_id),
@@ -292,7 +288,8 @@ def start_run(rt: Runtime, body: Mapping[str, Any], jobs: Iterable[JobView], log
         return
     if configmap is not None and manifest is not None:
         rt.kube.create_configmap(view.namespace, configmap)
-        ensure_upload_secret(rt, body, test, view.run_id, logger)
+        if uses_upload_policy(rt.config):
+            ensure_upload_secret(rt, body, test, view.run_id, logger)
         created = rt.kube.create_job(view.namespace, manifest)
         if created is not None:
             job = job_view(created)

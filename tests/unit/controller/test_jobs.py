@@ -133,6 +133,9 @@ def test_replica_pods_get_only_the_runs_upload_policy_never_store_keys() -> None
     ]
     assert refs == [f"hover-{RUN}-upload"]
     assert not any("envFrom" in c for c in pod_spec(job)["containers"])
+    # a file:// store (runs whose pods never fly, like the scale bench on kwok): no policy, no Secret
+    local = make_job(store_url="file:///var/uavtest")
+    assert "UAVTEST_S3_UPLOAD_POLICY" not in {e["name"] for e in container(local, "runner")["env"]}
 
 
 def test_pods_run_unprivileged_without_a_service_account_token() -> None:
