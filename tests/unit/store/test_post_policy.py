@@ -101,3 +101,9 @@ def test_an_unreachable_server_is_retried_then_given_up_naming_the_key_not_the_s
     retries = [r.getMessage() for r in caplog.records if "retry" in r.getMessage()]
     assert len(retries) >= 2 and all(key in m for m in retries)
     assert SIGNATURE not in caplog.text + str(e.value)
+
+
+def test_form_values_that_would_break_the_multipart_body_are_refused_before_sending() -> None:
+    store = PostPolicyStore(policy(f"http://127.0.0.1:{_closed_port()}/runs"), "runs", "arch")
+    with pytest.raises(BadInput):
+        store.put("ci/hover/r1/replica-0/result.json", b"{}", 'text/plain\r\nx-amz-meta-a: "b"')
