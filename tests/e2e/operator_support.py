@@ -2,11 +2,14 @@
 
 The operator runs as a real subprocess (`uavtest operator -n NS`), watching only the test module's
 namespace, with a kubeconfig whose user is a ServiceAccount holding exactly the chart's RBAC rules
-(charts/uavtest/files/rbac/): a call the chart does not grant fails the tests.
+(charts/uavtest/files/rbac/): a call the chart does not grant fails the tests. The store's root
+credentials are in the operator's environment only: the test namespace holds no copy of them (replica
+pods upload through the per-run policy Secret the operator creates; `assert_no_root_credentials`).
 """
 
 from __future__ import annotations
 
+import base64
 import contextlib
 import ipaddress
 import json
@@ -30,7 +33,6 @@ from harness.minio import MinioServer
 
 CRD = REPO_ROOT / "crds" / "uavtest.yaml"
 RBAC = REPO_ROOT / "charts" / "uavtest" / "files" / "rbac"
-SECRET = "uavtest-s3"
 SA = "uavtest-operator"
 
 
@@ -39,15 +41,13 @@ def install_crd(cluster: Cluster) -> None:
     cluster.kubectl("wait", "--for=condition=Established", "crd/uavtests.uavtest.io", "--timeout=60s")
 
 
-def store_secret(cluster: Cluster, namespace: str, minio: MinioServer) -> None:
-    cluster.apply(
-        {
-            "apiVersion": "v1",
-            "kind": "Secret",
-            "metadata": {"name": SECRET, "namespace": namespace},
-            "stringData": {"accessKey": minio.access_key, "secretKey": minio.secret_key},
-        }
-    )
+def assert_no_root_credentials(cluster: Cluster, namespace: str, minio: MinioServer) -> list[dict[str, Any]]:
+    """No Secret in NAMESPACE holds the store's secret key; returns the Secrets that are there."""
+    secrets_ = cluster.kubectl_json("get", "secrets", "-n", namespace)["items"]
+    for s in secrets_:
+        values = [base64.b64decode(v).decode(errors="replace") for v in (s.get("data") or {}).values()]
+        assert not any(minio.secret_key in v for v in values), f"Secret {s['metadata']['name']} holds it"
+    return list(secrets_)
 
 
 def least_privilege_kubeconfig(cluster: Cluster, namespace: str, out: Path) -> Path:
@@ -192,7 +192,6 @@ class Operator:
             "UAVTEST_OPERATOR_IMAGE_PULL_POLICY": "Never",
             "UAVTEST_OPERATOR_STORE_URL": f"s3://{bucket}",
             "UAVTEST_OPERATOR_POD_S3_ENDPOINT": pod_endpoint,
-            "UAVTEST_OPERATOR_S3_SECRET": SECRET,
             "UAVTEST_S3_ENDPOINT": minio.endpoint,
             "UAVTEST_S3_ACCESS_KEY": minio.access_key,
             "UAVTEST_S3_SECRET_KEY": minio.secret_key,
@@ -305,7 +304,6 @@ def running_operator(
     finalizer from them), then the operator stops.
     """
     install_crd(cluster)
-    store_secret(cluster, namespace, minio)
     op = Operator(
         cluster,
         namespace,

@@ -97,6 +97,11 @@ def test_operator_killed_mid_run_restarts_without_duplicate_jobs(
     status = wait_complete(cluster, namespace, name)
     assert len(jobs_of(cluster, namespace, name)) == 1
     assert (status["replicas"], status["passed"], status["errors"]) == (3, 3, 0), status
+    # the restarted operator kept the run's upload Secret: still one, the one its pods read
+    uploads = cluster.kubectl(
+        "get", "secrets", "-n", namespace, "-l", f"uavtest.io/test={name}", "-o", "name"
+    )
+    assert uploads.split() == [f"secret/{jobs_of(cluster, namespace, name)[0]['metadata']['name']}-upload"]
 
 
 def test_operator_down_while_a_test_is_created_starts_it_once(

@@ -5,6 +5,7 @@ The operator runs as `uavtest operator` with a ServiceAccount holding only the c
 
 from __future__ import annotations
 
+import base64
 import json
 import re
 import subprocess
@@ -18,6 +19,7 @@ import yaml
 
 from e2e.operator_support import (
     Operator,
+    assert_no_root_credentials,
     fresh_bucket,
     running_operator,
     store_keys,
@@ -110,6 +112,14 @@ def test_example_flies_in_parallel_pods_and_reports(
     )
     assert summary["passed"] == 3
     assert status["artifacts"]["summary"] == f"s3://{bucket}/{namespace}/{name}/{run}/aggregate/summary.json"
+    # the replicas wrote with the run's upload policy only: no copy of the store's keys in the namespace
+    secrets = assert_no_root_credentials(cluster, namespace, minio)
+    upload = next(s for s in secrets if s["metadata"]["name"] == f"{jobs[0]['metadata']['name']}-upload")
+    assert [r["kind"] for r in upload["metadata"]["ownerReferences"]] == ["UavTest"]
+    policy = json.loads(base64.b64decode(upload["data"]["policy"]))
+    assert policy["bucket"] == bucket and policy["key_prefix"] == f"{namespace}/{name}/{run}/"
+    runner = jobs[0]["spec"]["template"]["spec"]["containers"][0]
+    assert {e["name"] for e in runner["env"]} & {"UAVTEST_S3_ACCESS_KEY", "UAVTEST_S3_SECRET_KEY"} == set()
     # Events and metrics
     events = cluster.kubectl(
         "get", "events", "-n", namespace, "--field-selector", f"involvedObject.name={name}"

@@ -84,3 +84,35 @@ def test_a_replica_whose_store_is_down_retries_and_loses_nothing(minio: MinioSer
         if restarted is not None:
             restarted.terminate()
             restarted.wait(10)
+
+
+def test_a_replica_with_only_an_upload_policy_stores_its_artifacts(
+    minio: MinioServer, tmp_path: Path
+) -> None:
+    """A replica as a pod runs it: no S3 keys, only the upload policy the operator signed for its run."""
+    from datetime import UTC, datetime, timedelta
+
+    from test_store_s3 import settings_for
+
+    from uavtest.store.s3 import S3Store
+
+    operator_side = S3Store("uavtest", "artifacts", settings=settings_for(minio))
+    policy = operator_side.upload_policy(
+        "local/short-mission/it/", expires=datetime.now(UTC) + timedelta(hours=1), max_bytes=64 << 20
+    )
+    replica = make_replica(tmp_path, SHORT_MISSION)
+    cmd = replica.runner_cmd()
+    cmd[cmd.index("--store") + 1] = "s3://uavtest/artifacts"
+    env = {k: v for k, v in os.environ.items() if not k.startswith("UAVTEST_S3_")}
+    env["UAVTEST_S3_UPLOAD_POLICY"] = policy.model_dump_json()
+    with simulator(replica, tmp_path):
+        done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=RUN_TIMEOUT)
+    result = ReplicaResult.model_validate_json(done.stdout.strip().splitlines()[-1])
+    assert result.verdict is Verdict.PASS, f"{result.reason}\n{done.stderr[-3000:]}"
+    assert done.returncode == 0
+    assert "PostPolicyStore('s3://uavtest/artifacts/local/short-mission/it/'" in done.stderr
+    assert policy.fields["x-amz-signature"] not in done.stderr + done.stdout
+    prefix = "artifacts/local/short-mission/it/replica-0/"
+    names = sorted(o.object_name for o in minio.client().list_objects("uavtest", recursive=True))
+    assert names == [prefix + "flight.ulg", prefix + "result.json", prefix + "trajectory.csv"]
+    assert minio.client().get_object("uavtest", prefix + "flight.ulg").read(7) == b"ULog\x01\x12\x35"

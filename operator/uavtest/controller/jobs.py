@@ -36,12 +36,20 @@ The Job, and why it looks like this:
   per index (1 + backoffLimitPerIndex) + a start-up margin: a safety net for a wedged replica.
 - Pods run as non-root (uid 65532), read-only root filesystem, all capabilities dropped, seccomp
   RuntimeDefault, no service account token, no service links.
+- Replica pods hold no store credentials. The runner reads ``UAVTEST_S3_UPLOAD_POLICY`` from the
+  run's Secret ``<job>-upload`` (``build_upload_secret``): a POST policy the operator signed that
+  lets it upload under ``<namespace>/<test>/<run-id>/`` only, at most ``upload_max_bytes`` per
+  object, until the Job's deadline plus ``upload_margin_seconds`` (``upload_window``; S3 signs for
+  at most 7 days, so a longer deadline is clamped and the operator warns). The root credentials stay
+  in the operator's own namespace, and a test runs in any namespace the operator watches.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
+from datetime import datetime, timedelta
 from typing import Any
 
 import kopf
@@ -52,23 +60,35 @@ from uavtest.controller.settings import OperatorSettings
 from uavtest.engine.px4home import px4_home_env
 from uavtest.errors import BadInput
 from uavtest.spec.models import Metadata, Simulator, UavTest, UavTestSpec
+from uavtest.store.layout import run_prefix
+from uavtest.store.post_policy import POLICY_ENV, UploadPolicy
 from uavtest.store.settings import S3Settings
 
 __all__ = [
     "LOG_DIR",
+    "MAX_UPLOAD_POLICY_SECONDS",
     "RUNNER_EXIT_BAD_INPUT",
     "RUNNER_EXIT_ERROR",
     "RUNNER_EXIT_FAIL",
     "RUNNER_EXIT_PASS",
+    "UploadWindow",
     "build_configmap",
     "build_job",
+    "build_upload_secret",
     "deadline_seconds",
     "job_name_for",
     "labels_for",
+    "owned_by",
     "parallelism_for",
+    "pod_endpoint_url",
     "rendered_test_yaml",
     "run_id_for",
     "unresolved_files",
+    "upload_expires",
+    "upload_prefix",
+    "upload_secret_name",
+    "upload_window",
+    "uses_upload_policy",
 ]
 
 RUNNER_EXIT_PASS = 0
@@ -81,6 +101,8 @@ _TMP_DIR = "/tmp"
 _TEST_PATH = f"{names.TEST_MOUNT}/{names.TEST_FILE}"
 _API_PORT = 14540
 _JOB_NAME_MAX = 48  # leaves room for "-<index>" in Indexed Job pod hostnames (63)
+# S3 (SigV4) signatures are valid for at most 7 days; MinIO and AWS refuse longer-lived ones.
+MAX_UPLOAD_POLICY_SECONDS = 7 * 24 * 3600
 
 
 def run_id_for(uid: str) -> str:
@@ -257,22 +279,104 @@ def _sitl_container(test: UavTest, settings: OperatorSettings) -> dict[str, Any]
     return container
 
 
-def _s3_env(settings: OperatorSettings, s3: S3Settings) -> list[dict[str, Any]]:
-    def secret(key: str) -> dict[str, Any]:
-        return {"secretKeyRef": {"name": settings.s3_secret, "key": key}}
+def upload_secret_name(test: str, run_id: str) -> str:
+    """``<job>-upload``: the run's Secret holding its upload policy."""
+    return f"{job_name_for(test, run_id)}-upload"
 
+
+def upload_prefix(test: UavTest, run_id: str) -> str:
+    """``<namespace>/<test>/<run-id>/``: the store keys the run's upload policy allows."""
+    return run_prefix(test.metadata.namespace or "default", test.metadata.name, run_id)
+
+
+@dataclass(frozen=True)
+class UploadWindow:
+    """When a run's upload policy expires, and when it would have had to (``wanted``)."""
+
+    expires: datetime
+    wanted: datetime
+
+    @property
+    def clamped(self) -> bool:
+        """The Job may outlive the policy: S3's 7-day limit cut it short."""
+        return self.expires < self.wanted
+
+
+def upload_window(spec: UavTestSpec, settings: OperatorSettings, now: datetime) -> UploadWindow:
+    """The Job's activeDeadlineSeconds plus the margin from ``now``, at most S3's 7 days."""
+    if now.tzinfo is None:
+        raise ValueError("now must carry a time zone")
+    want = deadline_seconds(spec, settings) + settings.upload_margin_seconds
+    now = now.replace(microsecond=0)
+    return UploadWindow(
+        expires=now + timedelta(seconds=min(want, MAX_UPLOAD_POLICY_SECONDS)),
+        wanted=now + timedelta(seconds=want),
+    )
+
+
+def pod_endpoint_url(settings: OperatorSettings, s3: S3Settings) -> str:
+    """``http(s)://host:port`` of the store as replica pods reach it (the policy's form action)."""
+    endpoint = settings.pod_s3_endpoint or s3.endpoint
     secure = s3.secure if settings.pod_s3_secure is None else settings.pod_s3_secure
-    return [
-        {"name": "UAVTEST_S3_ENDPOINT", "value": settings.pod_s3_endpoint or s3.endpoint},
-        {"name": "UAVTEST_S3_SECURE", "value": "true" if secure else "false"},
-        {"name": "UAVTEST_S3_ACCESS_KEY", "valueFrom": secret(settings.s3_access_key_key)},
-        {"name": "UAVTEST_S3_SECRET_KEY", "valueFrom": secret(settings.s3_secret_key_key)},
-    ]
+    host, secure = S3Settings(endpoint=endpoint, secure=secure).host_and_secure()
+    return f"{'https' if secure else 'http'}://{host}"
 
 
-def _runner_container(
-    test: UavTest, run_id: str, settings: OperatorSettings, s3: S3Settings
+def build_upload_secret(
+    test: UavTest, run_id: str, policy: UploadPolicy, owner: Mapping[str, Any]
 ) -> dict[str, Any]:
+    """The Secret ``<job>-upload`` in the test's namespace, owned by the UavTest: the run's upload policy.
+
+    The annotations say when it expires and where it writes (nothing secret); the policy itself
+    (signature included) is only in the data.
+    """
+    secret: dict[str, Any] = {
+        "apiVersion": "v1",
+        "kind": "Secret",
+        "type": "Opaque",
+        "metadata": {
+            "name": upload_secret_name(test.metadata.name, run_id),
+            "labels": labels_for(test.metadata.name, run_id),
+            "annotations": {
+                names.UPLOAD_EXPIRES_ANNOTATION: policy.expires.isoformat(),
+                names.UPLOAD_PREFIX_ANNOTATION: policy.where(),
+            },
+        },
+        "stringData": {names.UPLOAD_POLICY_KEY: policy.model_dump_json()},
+    }
+    kopf.adopt(secret, owner=owner, strict=True)  # type: ignore[arg-type]
+    return secret
+
+
+def owned_by(meta: Mapping[str, Any], uid: str) -> bool:
+    """Whether an object's metadata names the object with ``uid`` among its owners."""
+    return any(ref.get("uid") == uid for ref in meta.get("ownerReferences") or [])
+
+
+def upload_expires(meta: Mapping[str, Any]) -> datetime | None:
+    """When an upload Secret's policy expires, from its annotation; None when it does not say."""
+    text = (meta.get("annotations") or {}).get(names.UPLOAD_EXPIRES_ANNOTATION)
+    try:
+        when = datetime.fromisoformat(text) if text else None
+    except ValueError:
+        return None
+    return when if when is not None and when.tzinfo is not None else None
+
+
+def uses_upload_policy(settings: OperatorSettings) -> bool:
+    """Whether replicas upload through a per-run policy: an ``s3://`` store (a ``file://`` store is
+    for runs without a real node, e.g. the scale bench on kwok: its pods never run)."""
+    return settings.store_url.startswith("s3://")
+
+
+def _upload_env(test: UavTest, run_id: str, settings: OperatorSettings) -> list[dict[str, Any]]:
+    if not uses_upload_policy(settings):
+        return []
+    ref = {"name": upload_secret_name(test.metadata.name, run_id), "key": names.UPLOAD_POLICY_KEY}
+    return [{"name": POLICY_ENV, "valueFrom": {"secretKeyRef": ref}}]
+
+
+def _runner_container(test: UavTest, run_id: str, settings: OperatorSettings) -> dict[str, Any]:
     spec = test.spec
     return {
         "name": names.CONTAINER_RUNNER,
@@ -298,7 +402,7 @@ def _runner_container(
         "env": [
             {"name": "UAVTEST_BASE_SEED", "value": str(spec.seed or 0)},
             *(dict(e) for e in _COMMON_ENV),
-            *_s3_env(settings, s3),
+            *_upload_env(test, run_id, settings),
         ],
         "resources": settings.runner_resources.manifest(),
         "securityContext": _container_security(settings),
@@ -334,7 +438,6 @@ def build_job(
     test: UavTest,
     run_id: str,
     settings: OperatorSettings,
-    s3: S3Settings,
     owner: Mapping[str, Any],
 ) -> dict[str, Any]:
     """One Indexed Job flying every replica of ``test`` (see the module doc), owned by the UavTest."""
@@ -358,7 +461,7 @@ def build_job(
                 "enableServiceLinks": False,
                 "securityContext": _pod_security(settings),
                 "initContainers": [_sitl_container(test, settings)],
-                "containers": [_runner_container(test, run_id, settings, s3)],
+                "containers": [_runner_container(test, run_id, settings)],
                 "volumes": [
                     {"name": "test", "configMap": {"name": name}},
                     {"name": "logs", "emptyDir": {}},

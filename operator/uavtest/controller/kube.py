@@ -14,6 +14,7 @@ from kubernetes.client.exceptions import ApiException
 from kubernetes.config.config_exception import ConfigException
 
 from uavtest.controller import names
+from uavtest.errors import InfrastructureError
 
 __all__ = ["API_CALLS", "Kube", "api_client"]
 
@@ -36,6 +37,10 @@ API_CALLS: frozenset[tuple[str, str, str]] = frozenset(
         ("batch", "jobs", "watch"),
         ("batch", "jobs", "create"),
         ("", "configmaps", "create"),
+        # each run's upload-policy Secret: created before its Job, read back (metadata only is used)
+        # when it exists already (an operator restarted mid-start); never listed, changed or deleted
+        ("", "secrets", "create"),
+        ("", "secrets", "get"),
         ("", "pods", "list"),
         ("", "pods", "watch"),
         # kopf.event and kopf's own handler events
@@ -75,6 +80,35 @@ class Kube:
                 return False
             raise
         return True
+
+    def create_secret(self, namespace: str, body: Mapping[str, Any]) -> bool:
+        """Create the Secret; False when one of that name already exists.
+
+        An error names the Secret and the HTTP status only: the API's answer is not passed on, so
+        nothing of the Secret's data can reach a log or an Event.
+        """
+        name = body["metadata"]["name"]
+        try:
+            self._core.create_namespaced_secret(namespace, body)
+        except ApiException as e:
+            if e.status == 409:
+                return False
+            raise InfrastructureError(
+                f"creating Secret {namespace}/{name} failed: HTTP {e.status} {e.reason}"
+            ) from None
+        return True
+
+    def secret_metadata(self, namespace: str, name: str) -> dict[str, Any] | None:
+        """The metadata of a Secret (its data is dropped unread); None when there is none."""
+        try:
+            secret = self._core.read_namespaced_secret(name, namespace)
+        except ApiException as e:
+            if e.status == 404:
+                return None
+            raise InfrastructureError(
+                f"reading Secret {namespace}/{name} failed: HTTP {e.status} {e.reason}"
+            ) from None
+        return self._client.sanitize_for_serialization(secret.metadata)  # type: ignore[no-any-return]
 
     def create_job(self, namespace: str, body: Mapping[str, Any]) -> dict[str, Any] | None:
         """Create the Job and return it as created; None when one of that name already exists."""

@@ -36,6 +36,9 @@ __all__ = [
     "PROGRESS_PREFIX",
     "TEST_FILE",
     "TEST_MOUNT",
+    "UPLOAD_EXPIRES_ANNOTATION",
+    "UPLOAD_POLICY_KEY",
+    "UPLOAD_PREFIX_ANNOTATION",
     "VERSION",
     "ConditionReason",
     "ConditionType",
@@ -73,6 +76,12 @@ CONTAINER_RUNNER = "runner"
 TEST_MOUNT = "/etc/uavtest"
 TEST_FILE = "test.yaml"
 
+# The run's upload Secret (<job>-upload): the signed policy under UPLOAD_POLICY_KEY; when it expires
+# and where it lets replicas write, as annotations (not secret: read without decoding the policy).
+UPLOAD_POLICY_KEY = "policy"
+UPLOAD_EXPIRES_ANNOTATION = f"{API_GROUP}/upload-expires"
+UPLOAD_PREFIX_ANNOTATION = f"{API_GROUP}/upload-prefix"
+
 
 class Reason(StrEnum):
     """Condition reasons beyond the spec's ``ConditionReason`` (both are documented values)."""
@@ -97,3 +106,4 @@ class EventReason(StrEnum):
     SIMULATOR_LIMITS = "SimulatorLimits"
     STORE_UNAVAILABLE = "StoreUnavailable"
     INVALID_SPEC = "InvalidSpec"
+    UPLOAD_POLICY_SHORT = "UploadPolicyShort"  # the run's upload policy expires before its Job's deadline

@@ -13,6 +13,7 @@ import logging
 import threading
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from datetime import UTC, datetime, timedelta
 from typing import Any
 
 import kopf
@@ -21,7 +22,21 @@ from pydantic import ValidationError
 from uavtest.analysis.models import RunSummary
 from uavtest.controller import names
 from uavtest.controller.events import events_for
-from uavtest.controller.jobs import build_configmap, build_job, unresolved_files
+from uavtest.controller.jobs import (
+    UploadWindow,
+    build_configmap,
+    build_job,
+    build_upload_secret,
+    deadline_seconds,
+    owned_by,
+    pod_endpoint_url,
+    unresolved_files,
+    upload_expires,
+    upload_prefix,
+    upload_secret_name,
+    upload_window,
+    uses_upload_policy,
+)
 from uavtest.controller.kube import Kube
 from uavtest.controller.metrics import Metrics
 from uavtest.controller.settings import OperatorSettings
@@ -30,13 +45,15 @@ from uavtest.controller.views import JobView, PodView, UavTestView, job_view, ua
 from uavtest.errors import BadInput, UavTestError
 from uavtest.spec.models import Metadata, UavTest, UavTestSpec
 from uavtest.spec.status import Condition, ConditionStatus, Phase, UavTestStatus
-from uavtest.store import ArtifactStore, S3Settings, open_store
+from uavtest.store import ArtifactStore, S3Settings, StoreUnavailable, open_store
+from uavtest.store.post_policy import UploadPolicy
 
 __all__ = [
     "Book",
     "Books",
     "Runtime",
     "aggregate",
+    "ensure_upload_secret",
     "job_of",
     "parse_test",
     "start_run",
@@ -168,8 +185,87 @@ def _invalid(
     kopf.event(body, type="Warning", reason=names.EventReason.INVALID_SPEC, message=message[:1024])  # type: ignore[arg-type]
 
 
+def _warn(body: Mapping[str, Any], logger: logging.Logger, message: str) -> None:
+    logger.warning(message)
+    kopf.event(  # type: ignore[arg-type]
+        body, type="Warning", reason=names.EventReason.UPLOAD_POLICY_SHORT, message=message[:1024]
+    )
+
+
+def _sign_upload_policy(rt: Runtime, test: UavTest, run_id: str, window: UploadWindow) -> UploadPolicy:
+    from uavtest.store.s3 import S3Store
+
+    store = rt.store()
+    assert isinstance(store, S3Store), "uses_upload_policy: an s3:// store"
+    try:
+        return store.upload_policy(
+            upload_prefix(test, run_id),
+            expires=window.expires,
+            max_bytes=rt.config.upload_max_bytes,
+            endpoint_url=pod_endpoint_url(rt.config, rt.s3),
+        )
+    except StoreUnavailable as e:
+        raise kopf.TemporaryError(
+            f"cannot sign the run's upload policy: {e}", delay=rt.config.aggregate_retry_seconds
+        ) from None
+
+
+def ensure_upload_secret(
+    rt: Runtime, body: Mapping[str, Any], test: UavTest, run_id: str, logger: logging.Logger
+) -> None:
+    """The run's Secret ``<job>-upload`` (its upload-only policy), created before the Job.
+
+    Idempotent: one that exists already (an operator restarted between creating it and the Job) is
+    kept as it is when it belongs to this UavTest; when it expires before the Job's deadline could
+    end, a Warning says so. A Secret of that name that is not this UavTest's is never used.
+    """
+    namespace = test.metadata.namespace or "default"
+    name = upload_secret_name(test.metadata.name, run_id)
+    now = datetime.now(UTC)
+    window = upload_window(test.spec, rt.config, now)
+    meta = rt.kube.secret_metadata(namespace, name)
+    if meta is None:
+        policy = _sign_upload_policy(rt, test, run_id, window)
+        if rt.kube.create_secret(namespace, build_upload_secret(test, run_id, policy, dict(body))):
+            until = policy.expires.isoformat()
+            logger.info(f"created Secret {name}: uploads to {policy.where()} until {until}")
+            if window.clamped:
+                _warn(
+                    body,
+                    logger,
+                    f"the run's upload policy expires at {window.expires.isoformat()} (S3 signs for at most "
+                    f"7 days), before the Job's deadline of {deadline_seconds(test.spec, rt.config)} s "
+                    "could end: replicas still running then cannot store their artifacts (fewer "
+                    "replicas or more parallelism shorten the deadline)",
+                )
+            return
+        meta = rt.kube.secret_metadata(namespace, name)  # created meanwhile by another attempt
+        if meta is None:
+            raise kopf.TemporaryError(f"Secret {namespace}/{name} came and went; retrying", delay=5)
+    uid = str(body.get("metadata", {}).get("uid", ""))
+    if not owned_by(meta, uid):
+        raise kopf.TemporaryError(
+            f"Secret {namespace}/{name} exists and does not belong to this UavTest (uid {uid}): the run "
+            "needs that name for its upload policy; delete that Secret and the run starts",
+            delay=60,
+        )
+    expires = upload_expires(meta)
+    must_last = now + timedelta(seconds=deadline_seconds(test.spec, rt.config))
+    logger.info(f"Secret {name} exists already: kept (expires {expires.isoformat() if expires else '?'})")
+    if expires is None or expires < must_last:
+        _warn(
+            body,
+            logger,
+            f"the run's upload Secret {name} (kept from an earlier start) expires at "
+            f"{expires.isoformat() if expires else 'an unknown time'}, before the Job's deadline could "
+            "end: replicas still running then cannot store their artifacts; delete and re-apply the "
+            "UavTest for a fresh one",
+        )
+
+
 def start_run(rt: Runtime, body: Mapping[str, Any], jobs: Iterable[JobView], logger: logging.Logger) -> None:
-    """Create the run's ConfigMap and Job unless they exist (the Job index is the lookup), then status."""
+    """Create the run's ConfigMap, upload Secret and Job unless the Job exists (the Job index is the
+    lookup), then status."""
     view = uavtest_view(body)
     try:
         test = parse_test(body)
@@ -184,7 +280,7 @@ def start_run(rt: Runtime, body: Mapping[str, Any], jobs: Iterable[JobView], log
         if job is None:
             owner = dict(body)
             configmap = build_configmap(test, view.run_id, owner)
-            manifest = build_job(test, view.run_id, rt.config, rt.s3, owner)
+            manifest = build_job(test, view.run_id, rt.config, owner)
         else:
             configmap = manifest = None
     except BadInput as e:
@@ -192,6 +288,8 @@ def start_run(rt: Runtime, body: Mapping[str, Any], jobs: Iterable[JobView], log
         return
     if configmap is not None and manifest is not None:
         rt.kube.create_configmap(view.namespace, configmap)
+        if uses_upload_policy(rt.config):
+            ensure_upload_secret(rt, body, test, view.run_id, logger)
         created = rt.kube.create_job(view.namespace, manifest)
         if created is not None:
             job = job_view(created)

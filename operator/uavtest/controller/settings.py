@@ -2,8 +2,10 @@
 
 Everything is prefixed ``UAVTEST_OPERATOR_`` (e.g. ``UAVTEST_OPERATOR_RUNNER_IMAGE``); the store's
 own endpoint and credentials are the store's variables (``UAVTEST_S3_ENDPOINT``, ...). The Helm
-chart sets these from ``values.yaml``. Nothing secret is held here: replica pods get the S3
-credentials from the Secret named by ``s3_secret`` through ``secretKeyRef``.
+chart sets these from ``values.yaml``. Nothing secret is held here. Replica pods never see the S3
+credentials: each run gets a Secret ``<job>-upload`` in its namespace holding an upload-only POST
+policy the operator signs (``uavtest.store.post_policy``), bound to the run's key prefix, to
+``upload_max_bytes`` per object, and expiring ``upload_margin_seconds`` after the Job's deadline.
 """
 
 from __future__ import annotations
@@ -71,11 +73,12 @@ class OperatorSettings(BaseSettings):
         None, description="S3 endpoint as pods reach it (default: the operator's UAVTEST_S3_ENDPOINT)"
     )
     pod_s3_secure: bool | None = Field(None, description="default: the operator's UAVTEST_S3_SECURE")
-    s3_secret: str = Field(
-        "uavtest-s3", description="Secret (in the test's namespace) with the store's credentials"
+    upload_max_bytes: int = Field(
+        1 << 30, ge=1, description="largest artifact a replica may upload (the policy's content-length-range)"
     )
-    s3_access_key_key: str = "accessKey"
-    s3_secret_key_key: str = "secretKey"
+    upload_margin_seconds: int = Field(
+        3600, ge=0, description="an upload policy outlives the Job's activeDeadlineSeconds by this much"
+    )
 
     backoff_limit_per_index: int = Field(2, ge=0, description="retries of one replica after bench errors")
     job_ttl_seconds: int | None = Field(86400, ge=0, description="ttlSecondsAfterFinished of replica Jobs")

@@ -190,6 +190,7 @@ def run_replica(opts: RunnerOptions, *, store: ArtifactStore | None = None) -> t
     seed = opts.seed if opts.seed is not None else spec.replica_seed(opts.replica)
     place = ReplicaPlace(opts.namespace, opts.test_name or test.metadata.name, opts.run_id, opts.replica)
     store = store if store is not None else open_store(opts.store)
+    log.info("store: %r", store)  # where and how (keys or upload policy), never a credential
 
     report = FlightReport()
     log_path: Path | None = None

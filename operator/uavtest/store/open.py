@@ -17,7 +17,11 @@ __all__ = ["open_store"]
 
 
 def open_store(url: str | Path, *, settings: S3Settings | None = None) -> ArtifactStore:
-    """The store ``url`` names; S3 endpoint and credentials come from ``UAVTEST_S3_*`` env vars."""
+    """The store ``url`` names; S3 endpoint and credentials come from ``UAVTEST_S3_*`` env vars.
+
+    With ``UAVTEST_S3_UPLOAD_POLICY`` set (a replica pod in a cluster), an ``s3://`` URL opens a
+    write-only ``PostPolicyStore`` that uploads through that policy instead of with keys.
+    """
     text = str(url)
     if "://" not in text:
         if not text:
@@ -31,11 +35,20 @@ def open_store(url: str | Path, *, settings: S3Settings | None = None) -> Artifa
             raise BadInput("file URL must be file:///absolute/dir", field="store", value=text)
         return LocalStore(Path(unquote(parts.path)))
     if parts.scheme == "s3":
-        from uavtest.store.s3 import S3Store
+        from uavtest.store.settings import S3Settings
 
         if not parts.netloc:
             raise BadInput("s3 URL needs a bucket", field="store", value=text, allowed="s3://BUCKET[/PREFIX]")
-        return S3Store(parts.netloc, unquote(parts.path).strip("/"), settings=settings)
+        settings = settings if settings is not None else S3Settings()
+        bucket, prefix = parts.netloc, unquote(parts.path).strip("/")
+        if settings.upload_policy is not None:
+            from uavtest.store.post_policy import PostPolicyStore, parse_policy
+
+            policy = parse_policy(settings.upload_policy.get_secret_value())
+            return PostPolicyStore(policy, bucket, prefix, settings=settings)
+        from uavtest.store.s3 import S3Store
+
+        return S3Store(bucket, prefix, settings=settings)
     raise BadInput(
         "unknown store URL scheme",
         field="store",

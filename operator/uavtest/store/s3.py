@@ -10,25 +10,22 @@ from __future__ import annotations
 import io
 import logging
 from collections.abc import Callable
+from datetime import datetime
 from typing import TypeVar
 
 import certifi
 import urllib3
 from minio import Minio
+from minio.datatypes import PostPolicy
 from minio.error import InvalidResponseError, S3Error, ServerError
-from tenacity import (
-    RetryCallState,
-    Retrying,
-    retry_if_exception,
-    stop_after_delay,
-    wait_exponential,
-    wait_random,
-)
 
+from uavtest.errors import BadInput
 from uavtest.store.errors import ArtifactNotFound, StoreUnavailable
+from uavtest.store.post_policy import UploadPolicy
+from uavtest.store.retry import retrying
 from uavtest.store.settings import S3Settings
 
-__all__ = ["S3Store", "is_transient"]
+__all__ = ["S3Store", "is_transient", "post_policy_for"]
 
 log = logging.getLogger(__name__)
 
@@ -62,6 +59,23 @@ def _describe(error: BaseException) -> str:
         return f"S3 error {error.code}: {error.message}"
     text = str(error) or type(error).__name__
     return f"{type(error).__name__}: {text}"
+
+
+def post_policy_for(bucket: str, name_prefix: str, expires: datetime, max_bytes: int) -> PostPolicy:
+    """The POST policy of one run: this bucket, names under ``name_prefix``, 0..``max_bytes`` bytes, until
+    ``expires``.
+
+    Any Content-Type may be sent (artifacts carry theirs); nothing else is allowed.
+    """
+    if not name_prefix.endswith("/"):
+        raise BadInput("an upload prefix must end with '/'", field="name_prefix", value=name_prefix)
+    if expires.tzinfo is None:
+        raise BadInput("an upload policy's expiry needs a time zone", field="expires", value=str(expires))
+    policy = PostPolicy(bucket, expires)
+    policy.add_starts_with_condition("key", name_prefix)
+    policy.add_starts_with_condition("Content-Type", "")
+    policy.add_content_length_range_condition(0, max_bytes)
+    return policy
 
 
 class S3Store:
@@ -108,30 +122,10 @@ class S3Store:
     # ------------------------------------------------------------------ retry
 
     def _retry(self, operation: str, key: str, call: Callable[[], T]) -> T:
-        def before_sleep(state: RetryCallState) -> None:
-            error = state.outcome.exception() if state.outcome else None
-            wait = state.next_action.sleep if state.next_action else 0.0
-            log.warning(
-                "store %s %s failed (%s); retry %d in %.1f s",
-                operation,
-                key,
-                _describe(error) if error else "?",
-                state.attempt_number,
-                wait,
-            )
-
         s = self.settings
-        jitter = wait_random(0, s.retry_initial)
-        backoff = wait_exponential(multiplier=s.retry_initial, max=s.retry_max) + jitter
-        retrying = Retrying(
-            stop=stop_after_delay(s.retry_total),
-            wait=backoff,
-            retry=retry_if_exception(is_transient),
-            before_sleep=before_sleep,
-            reraise=True,
-        )
+        retry = retrying(s, operation, key, transient=is_transient, describe=_describe, log=log)
         try:
-            return retrying(call)
+            return retry(call)
         except S3Error as e:
             if e.code in _MISSING_CODES:
                 raise ArtifactNotFound(key, self.url("")) from e
@@ -157,6 +151,37 @@ class S3Store:
                 if e.code not in {"BucketAlreadyOwnedByYou", "BucketAlreadyExists"}:
                     raise
         self._bucket_ready = True
+
+    # ------------------------------------------------------------------ upload policies
+
+    def upload_policy(
+        self, key_prefix: str, *, expires: datetime, max_bytes: int, endpoint_url: str | None = None
+    ) -> UploadPolicy:
+        """Sign a POST policy that lets its holder upload under ``key_prefix`` only, until ``expires``.
+
+        ``endpoint_url`` (``http(s)://host:port``) is where the holder reaches the server (a pod may
+        reach it by another address than this process); the signature does not depend on it. The
+        bucket is created first when missing (an upload policy cannot create it).
+        """
+        name_prefix = self._object(key_prefix)
+        policy = post_policy_for(self.bucket, name_prefix, expires, max_bytes)
+        if endpoint_url is None:
+            host, secure = self.settings.host_and_secure()
+            endpoint_url = f"{'https' if secure else 'http'}://{host}"
+
+        def call() -> dict[str, str]:
+            self._ensure_bucket()
+            return self._client.presigned_post_policy(policy)
+
+        fields = self._retry("sign upload policy", key_prefix, call)
+        return UploadPolicy(
+            url=f"{endpoint_url.rstrip('/')}/{self.bucket}",
+            bucket=self.bucket,
+            key_prefix=name_prefix,
+            expires=expires,
+            max_bytes=max_bytes,
+            fields=fields,
+        )
 
     # ------------------------------------------------------------------ ArtifactStore
 

@@ -3,7 +3,9 @@
 ``UAVTEST_S3_ENDPOINT`` (``host:port`` or ``http(s)://host:port``), ``UAVTEST_S3_ACCESS_KEY``,
 ``UAVTEST_S3_SECRET_KEY``, ``UAVTEST_S3_SECURE``; retry tuning with ``UAVTEST_S3_RETRY_TOTAL``
 (seconds before an upload gives up), ``UAVTEST_S3_RETRY_INITIAL``, ``UAVTEST_S3_RETRY_MAX`` and the
-per-request ``UAVTEST_S3_TIMEOUT``. The keys are ``SecretStr``: they never show in a repr or a log.
+per-request ``UAVTEST_S3_TIMEOUT``. A replica pod in a cluster has no keys: ``UAVTEST_S3_UPLOAD_POLICY``
+holds the upload-only policy the operator signed for its run (``uavtest.store.post_policy``). The keys
+and the policy are ``SecretStr``: they never show in a repr or a log.
 """
 
 from __future__ import annotations
@@ -26,6 +28,9 @@ class S3Settings(BaseSettings):
     endpoint: str = Field("localhost:9000", description="host:port, or http(s)://host:port")
     access_key: SecretStr | None = None
     secret_key: SecretStr | None = None
+    upload_policy: SecretStr | None = Field(
+        None, description="JSON of an UploadPolicy: upload-only, instead of the keys (replica pods)"
+    )
     secure: bool = Field(False, description="HTTPS; an https:// endpoint turns it on")
     region: str | None = None
     retry_total: float = Field(120.0, gt=0, description="seconds an operation keeps retrying")

@@ -34,7 +34,7 @@ S3 = S3Settings(endpoint="minio.storage:9000", access_key="AKIAEXAMPLE", secret_
 
 def make_job(body: dict[str, Any] | None = None, **settings: Any) -> dict[str, Any]:
     body = body or uavtest_body()
-    return build_job(parse_test(body), RUN, OperatorSettings(**settings), S3, body)
+    return build_job(parse_test(body), RUN, OperatorSettings(**settings), body)
 
 
 def pod_spec(job: dict[str, Any]) -> dict[str, Any]:
@@ -114,23 +114,28 @@ def test_runner_writes_to_the_store_under_the_run_layout() -> None:
     assert opts["--test-name"] == "hover"
 
 
-def test_secrets_come_only_through_secret_key_refs() -> None:
-    job = make_job(s3_secret="my-minio")
+def test_replica_pods_get_only_the_runs_upload_policy_never_store_keys() -> None:
+    job = make_job()
     text = yaml.safe_dump(job)
     assert "AKIAEXAMPLE" not in text and "s3cr3t-value" not in text
     env = {e["name"]: e for e in container(job, "runner")["env"]}
-    assert env["UAVTEST_S3_ACCESS_KEY"]["valueFrom"]["secretKeyRef"] == {
-        "name": "my-minio",
-        "key": "accessKey",
+    assert env["UAVTEST_S3_UPLOAD_POLICY"]["valueFrom"]["secretKeyRef"] == {
+        "name": f"hover-{RUN}-upload",
+        "key": "policy",
     }
-    assert env["UAVTEST_S3_SECRET_KEY"]["valueFrom"]["secretKeyRef"] == {
-        "name": "my-minio",
-        "key": "secretKey",
-    }
-    assert env["UAVTEST_S3_ENDPOINT"]["value"] == "minio.storage:9000"
-    pod_endpoint = make_job(pod_s3_endpoint="10.0.0.7:9000")
-    env2 = {e["name"]: e for e in container(pod_endpoint, "runner")["env"]}
-    assert env2["UAVTEST_S3_ENDPOINT"]["value"] == "10.0.0.7:9000"
+    assert not {"UAVTEST_S3_ACCESS_KEY", "UAVTEST_S3_SECRET_KEY", "UAVTEST_S3_ENDPOINT"} & set(env)
+    # the upload Secret is the only Secret any container of the pod refers to
+    refs = [
+        e["valueFrom"]["secretKeyRef"]["name"]
+        for c in [*pod_spec(job)["initContainers"], *pod_spec(job)["containers"]]
+        for e in c.get("env", [])
+        if "secretKeyRef" in e.get("valueFrom", {})
+    ]
+    assert refs == [f"hover-{RUN}-upload"]
+    assert not any("envFrom" in c for c in pod_spec(job)["containers"])
+    # a file:// store (runs whose pods never fly, like the scale bench on kwok): no policy, no Secret
+    local = make_job(store_url="file:///var/uavtest")
+    assert "UAVTEST_S3_UPLOAD_POLICY" not in {e["name"] for e in container(local, "runner")["env"]}
 
 
 def test_pods_run_unprivileged_without_a_service_account_token() -> None:
