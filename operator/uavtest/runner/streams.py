@@ -6,8 +6,9 @@ heartbeats, SYS_STATUS, SYSTEM_TIME, LOCAL_POSITION_NED, GLOBAL_POSITION_INT (fo
 HOME_POSITION (0.5 Hz, checked against world.home), EXTENDED_SYS_STATE, STATUSTEXT and the
 answers of the protocols it runs; the flight itself is judged from the ULog. So once connected
 it stops the streams it never reads and slows GLOBAL_POSITION_INT, on PX4 and on the built-in
-simulator alike: less work for both, the same flight. The requests are sent once and not awaited: a vehicle that refuses one (an older PX4
-without that stream) flies the same, only with more telemetry.
+simulator alike: less work for both, the same flight. The requests are sent once and not
+awaited: a vehicle that refuses one (an older PX4 without that stream) flies the same, only
+with more telemetry.
 """
 
 from __future__ import annotations
