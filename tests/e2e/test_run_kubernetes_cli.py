@@ -15,6 +15,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+import yaml
 from pyulog import ULog
 
 from e2e.operator_support import Operator, fresh_bucket, running_operator
@@ -81,14 +82,18 @@ def test_replicas_seed_out_and_json_are_honoured(
     # stdout is the local engine's --json: a RunSummary
     summary = RunSummary.model_validate_json(done.stdout)
     name = summary.test
-    assert name.startswith("hover-") and summary.namespace == namespace
+    assert name == yaml.safe_load(HOVER.read_text())["metadata"]["name"]  # the test keeps its name
+    assert summary.namespace == namespace
     assert (summary.replicas, summary.passed, summary.failed, summary.errors) == (2, 2, 0, 0)
     assert [(r.index, r.seed) for r in summary.results] == [(0, 7), (1, 8)]
     assert summary.flight_time is not None  # the store's summary.json, not only the status
-    # the UavTest it created carries the overrides, and its status the seeds
+    # the UavTest it applied carries the overrides, and the run it followed the seeds
     obj = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)
     assert (obj["spec"]["replicas"], obj["spec"]["seed"]) == (2, 7)
-    assert sorted((r["index"], r["seed"], r["verdict"]) for r in obj["status"]["results"]) == [
+    run_name = stderr.split("run uavtestrun/", 1)[1].split(":")[0]
+    run_obj = cluster.kubectl_json("get", "uavtestrun", run_name, "-n", namespace)
+    assert run_obj["spec"]["testName"] == name and run_obj["spec"]["testSpec"]["replicas"] == 2
+    assert sorted((r["index"], r["seed"], r["verdict"]) for r in run_obj["status"]["results"]) == [
         (0, 7, "pass"),
         (1, 8, "pass"),
     ]
@@ -113,12 +118,12 @@ def test_timeout_exits_3_and_leaves_the_test_running(
     try:
         assert done.returncode == 3, done.stderr[-3000:]
         stderr = " ".join(done.stderr.split())
-        assert "still running" in stderr and "kubectl get uavtest/" in stderr
-        name = stderr.split("created uavtest/", 1)[1].split()[0]
-        obj = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)  # still there
+        assert "still running" in stderr and "kubectl get uavtestrun/" in stderr
+        name = stderr.split("run uavtestrun/", 1)[1].split(":")[0]
+        obj = cluster.kubectl_json("get", "uavtestrun", name, "-n", namespace)  # still there
         complete = [c for c in obj.get("status", {}).get("conditions", []) if c["type"] == "Complete"]
         assert not complete or complete[0]["status"] != "True"
     finally:
-        if done.returncode == 3 and "created uavtest/" in done.stderr:
-            created = done.stderr.split("created uavtest/", 1)[1].split()[0]
-            cluster.kubectl("delete", "uavtest", created, "-n", namespace, "--timeout=120s", check=False)
+        if done.returncode == 3 and "run uavtestrun/" in done.stderr:
+            created = " ".join(done.stderr.split()).split("run uavtestrun/", 1)[1].split(":")[0]
+            cluster.kubectl("delete", "uavtestrun", created, "-n", namespace, "--timeout=120s", check=False)

@@ -1,13 +1,16 @@
-"""``uavtest run TEST --engine kubernetes``: create the test in a cluster, follow its status, exit.
+"""``uavtest run TEST --engine kubernetes``: apply the test in a cluster, follow its run, exit.
 
-Each call is a new run: the rendered test is created with ``generateName`` (a UavTest's spec is
-immutable; one object is one run). Progress comes from watching the object's status, and the exit
-code is the local engine's: 0 every replica passed, 1 some replica failed, 2 bad input (also a
+The test keeps its identity (``metadata.name``): the rendered test is created, or the UavTest of
+that name gets the new spec. Each call starts one run (a ``UavTestRun`` the operator creates under
+a name known in advance): a changed spec starts the run ``<test>-g<generation>``; an unchanged one
+sets the ``uavtest.io/rerun`` annotation to a fresh value, which starts ``<test>-r<hash>``.
+Progress comes from watching that run's status, and the exit code is the local engine's: 0 every
+replica passed, 1 some replica failed, 2 bad input (also a
 test the API server rejects), 3 bench errors only, or the cluster could not be used.
 
 ``--replicas`` / ``--seed`` override the spec before it is created; ``--json`` prints the local
 engine's ``RunSummary``; ``--out`` downloads the run's artifacts (``cluster_download``);
-``--timeout`` gives up waiting (exit 3) and leaves the UavTest running.
+``--timeout`` gives up waiting (exit 3) and leaves the run going.
 """
 
 from __future__ import annotations
@@ -120,23 +123,47 @@ def _namespace(manifest: Mapping[str, Any], namespace: str | None) -> str:
         return "default"
 
 
-def _create(custom: Any, namespace: str, manifest: dict[str, Any]) -> str:
+def _apply(custom: Any, namespace: str, manifest: dict[str, Any]) -> str:
+    """Create the UavTest, or give the existing one this spec; the name of the run this starts."""
     from kubernetes.client.exceptions import ApiException
 
+    from uavtest.controller.runs import generation_run_name, rerun_name, spec_hash
+
+    name = str(manifest["metadata"]["name"])
+    args = (names.API_GROUP, names.VERSION, namespace, names.PLURAL)
     try:
-        created = custom.create_namespaced_custom_object(
-            names.API_GROUP, names.VERSION, namespace, names.PLURAL, manifest
-        )
+        try:
+            existing = custom.get_namespaced_custom_object(*args, name)
+        except ApiException as e:
+            if e.status != 404:
+                raise
+            created = custom.create_namespaced_custom_object(*args, manifest)
+            return generation_run_name(name, int(created["metadata"].get("generation") or 1))
+        body = dict(existing)
+        meta = dict(body["metadata"])
+        token = None
+        if spec_hash(existing.get("spec") or {}) == spec_hash(manifest.get("spec") or {}):
+            token = f"cli-{time.time_ns()}"
+            meta["annotations"] = {**(meta.get("annotations") or {}), names.RERUN_ANNOTATION: token}
+        body["metadata"] = meta
+        body["spec"] = manifest["spec"]
+        replaced = custom.replace_namespaced_custom_object(*args, name, body)
     except ApiException as e:
         if e.status in (400, 422):
             raise BadInput(f"the cluster rejected the test: {_api_message(e)}") from None
         if e.status == 404:
             raise InfrastructureError(
-                f"no UavTest API in the cluster (or no namespace {namespace}): install the CRD "
+                f"no UavTest API in the cluster (or no namespace {namespace}): install the CRDs "
                 "(kubectl apply -f crds/) or the Helm chart"
             ) from None
-        raise InfrastructureError(f"creating the UavTest failed: {_api_message(e)}") from None
-    return str(created["metadata"]["name"])
+        if e.status == 409:
+            raise InfrastructureError(
+                f"uavtest/{name} changed meanwhile; run again: {_api_message(e)}"
+            ) from None
+        raise InfrastructureError(f"applying the UavTest failed: {_api_message(e)}") from None
+    if token is not None:
+        return rerun_name(name, token)
+    return generation_run_name(name, int(replaced["metadata"].get("generation") or 1))
 
 
 def _api_message(e: Any) -> str:
@@ -151,8 +178,8 @@ def _api_message(e: Any) -> str:
 def _follow(
     custom: Any, namespace: str, name: str, console: Console, *, timeout: float | None = None
 ) -> dict[str, Any]:
-    """Watch the UavTest until its status is final or ``timeout`` seconds pass; show progress
-    meanwhile; return the latest status (``is_final`` tells which)."""
+    """Watch the UavTestRun ``name`` (it may not exist yet) until its status is final or ``timeout``
+    seconds pass; show progress meanwhile; return the latest status (``is_final`` tells which)."""
     import kubernetes
     from kubernetes.client.exceptions import ApiException
     from urllib3.exceptions import HTTPError
@@ -181,14 +208,14 @@ def _follow(
                     names.API_GROUP,
                     names.VERSION,
                     namespace,
-                    names.PLURAL,
+                    names.RUN_PLURAL,
                     field_selector=f"metadata.name={name}",
                     resource_version=resource_version,
                     timeout_seconds=max(1, min(_WATCH_SECONDS, math.ceil(left))),
                 ):
                     obj = event["object"]
                     if event["type"] == "DELETED":
-                        raise InfrastructureError(f"uavtest/{name} was deleted before it finished")
+                        raise InfrastructureError(f"uavtestrun/{name} was deleted before it finished")
                     if event["type"] == "ERROR":
                         resource_version = None
                         break
@@ -205,12 +232,12 @@ def _follow(
                 if e.status == 410:  # resourceVersion too old: list again
                     resource_version = None
                     continue
-                raise InfrastructureError(f"watching uavtest/{name} failed: {_api_message(e)}") from None
+                raise InfrastructureError(f"watching uavtestrun/{name} failed: {_api_message(e)}") from None
             except HTTPError as e:
                 failures += 1
                 if failures > 5:
                     raise InfrastructureError(
-                        f"lost the cluster while watching uavtest/{name}: {e}"
+                        f"lost the cluster while watching uavtestrun/{name}: {e}"
                     ) from None
                 time.sleep(min(2.0**failures, 30.0, max(deadline - time.monotonic(), 0.0)))
             finally:
@@ -220,9 +247,9 @@ def _follow(
 
 def still_running_message(name: str, namespace: str, status: Mapping[str, Any], timeout: float) -> str:
     """What to tell a user whose ``--timeout`` ran out: the test goes on, and how to follow it."""
-    where = f"uavtest/{name} -n {namespace}"
+    where = f"uavtestrun/{name} -n {namespace}"
     return (
-        f"gave up waiting after {timeout:g} s (--timeout): uavtest/{name} is still running in namespace "
+        f"gave up waiting after {timeout:g} s (--timeout): uavtestrun/{name} is still running in namespace "
         f"{namespace} ({progress_text(status)}); follow it with `kubectl get {where} -w` "
         f"or `kubectl wait --for=condition=Complete {where}`"
     )
@@ -334,11 +361,11 @@ def _summary(status: Mapping[str, Any], name: str, ns: str, out: Path | None, do
 
 
 def run_in_cluster(opts: ClusterRunOptions, *, console: Console | None = None) -> int:
-    """Create the rendered test as a new UavTest; with ``wait``, follow it and return its exit code.
+    """Apply the rendered test and start a run of it; with ``wait``, follow the run, return its exit code.
 
     ``--out`` is checked before anything is created (exit 2 without the S3 settings); a download
     that fails afterwards is said on stderr and makes a passing run exit 3 (a failing one stays 1).
-    ``--timeout`` running out exits 3 and leaves the UavTest running.
+    ``--timeout`` running out exits 3 and leaves the run going.
     """
     import os
 
@@ -354,10 +381,7 @@ def run_in_cluster(opts: ClusterRunOptions, *, console: Console | None = None) -
     test = apply_overrides(load_test(Path(opts.test)), replicas=opts.replicas, seed=opts.seed)
     manifest = render(test)
     ns = _namespace(manifest, opts.namespace)
-    meta = manifest["metadata"]
-    base = str(meta.pop("name"))
-    meta["generateName"] = f"{base[:52]}-"
-    meta["namespace"] = ns
+    manifest["metadata"]["namespace"] = ns
     import kubernetes
 
     try:
@@ -366,18 +390,19 @@ def run_in_cluster(opts: ClusterRunOptions, *, console: Console | None = None) -
         raise InfrastructureError(f"no cluster to talk to (KUBECONFIG / in-cluster config): {e}") from None
     with client:
         custom = kubernetes.client.CustomObjectsApi(client)
-        name = _create(custom, ns, manifest)
+        name = str(manifest["metadata"]["name"])
+        run_name = _apply(custom, ns, manifest)
         spec = test.spec
         console.print(
-            f"created uavtest/{name} in namespace {ns}: {spec.replicas} replica(s), "
-            f"seeds {spec.replica_seed(0)}..{spec.replica_seed(spec.replicas - 1)}",
+            f"applied uavtest/{name} in namespace {ns}, run uavtestrun/{run_name}: {spec.replicas} "
+            f"replica(s), seeds {spec.replica_seed(0)}..{spec.replica_seed(spec.replicas - 1)}",
             highlight=False,
         )
         if not opts.wait:
             return int(ExitCode.PASS)
-        status = _follow(custom, ns, name, console, timeout=opts.timeout)
+        status = _follow(custom, ns, run_name, console, timeout=opts.timeout)
     if not is_final(status):  # only when --timeout ran out
-        text = still_running_message(name, ns, status, opts.timeout or 0.0)
+        text = still_running_message(run_name, ns, status, opts.timeout or 0.0)
         console.print(text, highlight=False, soft_wrap=True)
         return int(ExitCode.INFRASTRUCTURE)
     console.print(results_table(name, status))

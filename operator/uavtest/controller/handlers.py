@@ -1,14 +1,19 @@
-"""The kopf handlers of the uavtest operator: thin, typed, each delegating to ``reconcile``.
+"""The kopf handlers of the uavtest operator: thin, typed, each delegating to ``reconcile`` / ``testsync``.
+
+Two kinds, like CronJob and Job: a ``UavTest`` (the test) owns ``UavTestRun`` objects (its runs);
+each run owns its ConfigMap, upload Secret and Indexed Job.
 
 - startup: kopf's finalizer and progress storage under uavtest.io, clients and metrics in memo;
-- indexes of UavTests, their Jobs and their pods (keyed by namespace and test name), so every
+- indexes of UavTests, their runs, Jobs and pods (keyed by namespace and test name), so every
   handler sees its siblings without an API call and a restart rebuilds them from one list;
-- on create of a UavTest: its ConfigMap and Indexed Job, unless they exist (idempotent);
-- on every event of a replica Job: the parent's status from the Job and the pods index (patched
-  only when it changed). The Job's own status changes with every pod that starts, becomes ready,
-  ends or is retried, so pod events need no handler of their own: they only update the index,
-  which keeps a few hundred bytes per pod instead of queueing whole pod bodies for a handler;
-- a timer that runs only while a test awaits aggregation (every index finished): aggregate,
+- UavTest created, changed (spec or the ``uavtest.io/rerun`` annotation) or found at start-up:
+  the runs it needs (``testsync.ensure_runs``); with ``spec.schedule``, a timer checks the
+  schedule every ``SCHEDULE_CHECK_SECONDS``;
+- UavTestRun created: its ConfigMap and Indexed Job, unless they exist (idempotent); every event
+  of a run: the test's summary and history trimming (``testsync.sync_test``);
+- every event of a replica Job: the run's status from the Job and the pods index (patched only
+  when it changed). Pod events need no handler: they only update the index;
+- a timer that runs only while a run awaits aggregation (every index finished): aggregate,
   or, while the store is unreachable, come back after ``AGGREGATE_RETRY_SECONDS``.
 """
 
@@ -19,19 +24,30 @@ from typing import Any
 
 import kopf
 
-from uavtest.controller import names, reconcile
+from uavtest.controller import names, reconcile, testsync
 from uavtest.controller.kube import Kube, api_client
 from uavtest.controller.metrics import Metrics
 from uavtest.controller.settings import OperatorSettings
 from uavtest.controller.status import awaiting_aggregation
-from uavtest.controller.views import JobView, PodView, UavTestView, job_view, pod_view, uavtest_view
+from uavtest.controller.views import (
+    JobView,
+    PodView,
+    RunView,
+    TestView,
+    job_view,
+    pod_view,
+    run_view,
+    test_view,
+)
 from uavtest.store import S3Settings
 
-__all__ = ["AGGREGATE_RETRY_SECONDS"]
+__all__ = ["AGGREGATE_RETRY_SECONDS", "SCHEDULE_CHECK_SECONDS"]
 
 AGGREGATE_RETRY_SECONDS = 30.0
+SCHEDULE_CHECK_SECONDS = 15.0
 
 _UAVTESTS = (names.API_GROUP, names.VERSION, names.PLURAL)
+_RUNS = (names.API_GROUP, names.VERSION, names.RUN_PLURAL)
 _OURS = {names.LABEL_RUN: kopf.PRESENT, names.LABEL_MANAGED_BY: names.MANAGER}
 
 
@@ -50,11 +66,11 @@ def configure(
     )
     settings.posting.level = logging.WARNING  # Events only for warnings: no event per handler run
     # Serve the resources and namespaces found at start-up; do not watch CRDs and namespaces (which
-    # would need cluster-wide read access): the chart installs the CRD before the operator starts.
+    # would need cluster-wide read access): the chart installs the CRDs before the operator starts.
     settings.scanning.disabled = True
     config = memo.get("config") or OperatorSettings()
 
-    def tests() -> list[UavTestView]:
+    def tests() -> list[TestView]:
         return [view for store in list(tests_by_name.values()) for view in list(store)]
 
     metrics = Metrics(tests)
@@ -75,8 +91,14 @@ def shut_down(memo: kopf.Memo, **_: Any) -> None:
 
 
 @kopf.index(*_UAVTESTS)
-def tests_by_name(body: kopf.Body, namespace: str, name: str, **_: Any) -> dict[tuple[str, str], UavTestView]:
-    return {(namespace, name): uavtest_view(body)}
+def tests_by_name(body: kopf.Body, namespace: str, name: str, **_: Any) -> dict[tuple[str, str], TestView]:
+    return {(namespace, name): test_view(body)}
+
+
+@kopf.index(*_RUNS)
+def runs_by_test(body: kopf.Body, namespace: str, **_: Any) -> dict[tuple[str, str], RunView]:
+    view = run_view(body)
+    return {(namespace, view.test): view}
 
 
 @kopf.index("batch/v1", "jobs", labels=_OURS)
@@ -94,25 +116,79 @@ def pods_by_test(
     return {(namespace, labels[names.LABEL_TEST]): view} if view is not None else None
 
 
+# ------------------------------------------------------------------------------------------ tests
+
+
+@kopf.on.resume(*_UAVTESTS)
 @kopf.on.create(*_UAVTESTS)
+@kopf.on.update(*_UAVTESTS)
+def ensure_runs(body: kopf.Body, memo: kopf.Memo, logger: kopf.Logger, **_: Any) -> None:
+    rt = _rt(memo)
+    with rt.metrics.reconcile_errors.labels(handler="test").count_exceptions():
+        testsync.ensure_runs(rt, body, logger)
+
+
+def _scheduled(spec: kopf.Spec, **_: Any) -> bool:
+    return bool(spec.get("schedule"))
+
+
+@kopf.timer(*_UAVTESTS, interval=SCHEDULE_CHECK_SECONDS, when=_scheduled)
+def run_schedule(body: kopf.Body, memo: kopf.Memo, logger: kopf.Logger, **_: Any) -> None:
+    rt = _rt(memo)
+    with rt.metrics.reconcile_errors.labels(handler="schedule").count_exceptions():
+        testsync.ensure_runs(rt, body, logger, schedule=True)
+
+
+@kopf.on.event(*_UAVTESTS)
+def forget_deleted(type: str, namespace: str, name: str, memo: kopf.Memo, **_: Any) -> None:
+    if type == "DELETED":
+        _rt(memo).books.drop((namespace, f"{names.KIND}/{name}"))
+
+
+# ------------------------------------------------------------------------------------------- runs
+
+
+@kopf.on.create(*_RUNS)
 def create_run(
     body: kopf.Body,
     namespace: str,
-    name: str,
     memo: kopf.Memo,
     logger: kopf.Logger,
     jobs_by_test: kopf.Index,
     **_: Any,
 ) -> None:
     rt = _rt(memo)
+    test = run_view(body).test
     with rt.metrics.reconcile_errors.labels(handler="create").count_exceptions():
-        reconcile.start_run(rt, body, jobs_by_test.get((namespace, name), []), logger)
+        reconcile.start_run(rt, body, jobs_by_test.get((namespace, test), []), logger)
 
 
-@kopf.on.event(*_UAVTESTS)
-def forget_deleted(type: str, namespace: str, name: str, memo: kopf.Memo, **_: Any) -> None:
+@kopf.on.event(*_RUNS)
+def run_changed(
+    type: str,
+    body: kopf.Body,
+    namespace: str,
+    name: str,
+    memo: kopf.Memo,
+    logger: kopf.Logger,
+    tests_by_name: kopf.Index,
+    runs_by_test: kopf.Index,
+    **_: Any,
+) -> None:
+    rt = _rt(memo)
     if type == "DELETED":
-        _rt(memo).books.drop((namespace, name))
+        rt.books.drop((namespace, name))
+    test_name = (body.get("spec") or {}).get("testName")
+    if not test_name:
+        return
+    test = next(iter(tests_by_name.get((namespace, test_name), [])), None)
+    if test is None:
+        return  # the test is gone (its runs follow) or not seen yet
+    runs = [
+        r for r in runs_by_test.get((namespace, test_name), []) if not (type == "DELETED" and r.name == name)
+    ]
+    with rt.metrics.reconcile_errors.labels(handler="summary").count_exceptions():
+        testsync.sync_test(rt, test, runs, logger)
 
 
 def _sync(
@@ -120,21 +196,21 @@ def _sync(
     namespace: str,
     test_name: str,
     run_id: str,
-    tests_by_name: kopf.Index,
+    runs_by_test: kopf.Index,
     jobs_by_test: kopf.Index,
     pods_by_test: kopf.Index,
     *,
     job_deleted: bool = False,
 ) -> None:
     key = (namespace, test_name)
-    test = next((t for t in tests_by_name.get(key, []) if t.run_id == run_id), None)
-    if test is None:
-        return  # an orphan of a deleted UavTest, or an older run of a re-created one
+    run = next((r for r in runs_by_test.get(key, []) if r.run_id == run_id), None)
+    if run is None:
+        return  # an orphan of a deleted run
     rt = _rt(memo)
     job = reconcile.job_of(jobs_by_test.get(key, []), run_id)
     pods = [p for p in pods_by_test.get(key, []) if p.run_id == run_id]
     with rt.metrics.reconcile_errors.labels(handler="status").count_exceptions():
-        reconcile.sync_run(rt, test, job, pods, job_deleted=job_deleted and job is None)
+        reconcile.sync_run(rt, run, job, pods, job_deleted=job_deleted and job is None)
 
 
 @kopf.on.event("batch/v1", "jobs", labels=_OURS)
@@ -143,7 +219,7 @@ def job_changed(
     namespace: str,
     labels: kopf.Labels,
     memo: kopf.Memo,
-    tests_by_name: kopf.Index,
+    runs_by_test: kopf.Index,
     jobs_by_test: kopf.Index,
     pods_by_test: kopf.Index,
     **_: Any,
@@ -153,7 +229,7 @@ def job_changed(
         namespace,
         labels[names.LABEL_TEST],
         labels[names.LABEL_RUN],
-        tests_by_name,
+        runs_by_test,
         jobs_by_test,
         pods_by_test,
         job_deleted=type == "DELETED",
@@ -164,11 +240,10 @@ def _awaiting(status: kopf.Status, **_: Any) -> bool:
     return awaiting_aggregation(status)
 
 
-@kopf.timer(*_UAVTESTS, interval=AGGREGATE_RETRY_SECONDS, when=_awaiting)
+@kopf.timer(*_RUNS, interval=AGGREGATE_RETRY_SECONDS, when=_awaiting)
 def aggregate_run(
     body: kopf.Body,
     namespace: str,
-    name: str,
     memo: kopf.Memo,
     logger: kopf.Logger,
     jobs_by_test: kopf.Index,
@@ -176,8 +251,8 @@ def aggregate_run(
     **_: Any,
 ) -> None:
     rt = _rt(memo)
-    run_id = uavtest_view(body).run_id
-    job = reconcile.job_of(jobs_by_test.get((namespace, name), []), run_id)
-    pods = [p for p in pods_by_test.get((namespace, name), []) if p.run_id == run_id]
+    view = run_view(body)
+    job = reconcile.job_of(jobs_by_test.get((namespace, view.test), []), view.run_id)
+    pods = [p for p in pods_by_test.get((namespace, view.test), []) if p.run_id == view.run_id]
     with rt.metrics.reconcile_errors.labels(handler="aggregate").count_exceptions():
         reconcile.aggregate(rt, body, job, pods, logger)

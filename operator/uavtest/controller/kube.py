@@ -32,6 +32,17 @@ API_CALLS: frozenset[tuple[str, str, str]] = frozenset(
         # kopf.adopt sets blockOwnerDeletion on children: clusters that enforce owner references
         # (OwnerReferencesPermissionEnforcement) require update on the owner's finalizers
         (names.API_GROUP, f"{names.PLURAL}/finalizers", "update"),
+        # a run created by hand (no spec.testSpec) flies the test's current spec: read it once
+        (names.API_GROUP, names.PLURAL, "get"),
+        # runs: kopf watches them (progress annotations, finalizer); ours: create one per trigger,
+        # fill in a hand-made run's testSpec, write its /status, delete runs beyond the history limits
+        (names.API_GROUP, names.RUN_PLURAL, "list"),
+        (names.API_GROUP, names.RUN_PLURAL, "watch"),
+        (names.API_GROUP, names.RUN_PLURAL, "patch"),
+        (names.API_GROUP, names.RUN_PLURAL, "create"),
+        (names.API_GROUP, names.RUN_PLURAL, "delete"),
+        (names.API_GROUP, f"{names.RUN_PLURAL}/status", "patch"),
+        (names.API_GROUP, f"{names.RUN_PLURAL}/finalizers", "update"),
         # children
         ("batch", "jobs", "list"),
         ("batch", "jobs", "watch"),
@@ -120,11 +131,64 @@ class Kube:
             raise
         return self._client.sanitize_for_serialization(created)  # type: ignore[no-any-return]
 
-    def patch_status(self, namespace: str, name: str, status: Mapping[str, Any]) -> bool:
-        """Merge-patch ``status`` into the UavTest's /status; False when the UavTest is gone."""
+    def _patch_status(self, plural: str, namespace: str, name: str, status: Mapping[str, Any]) -> bool:
         try:
             self._custom.patch_namespaced_custom_object_status(
-                names.API_GROUP, names.VERSION, namespace, names.PLURAL, name, {"status": dict(status)}
+                names.API_GROUP, names.VERSION, namespace, plural, name, {"status": dict(status)}
+            )
+        except ApiException as e:
+            if e.status == 404:
+                return False
+            raise
+        return True
+
+    def patch_status(self, namespace: str, name: str, status: Mapping[str, Any]) -> bool:
+        """Merge-patch ``status`` into the UavTestRun's /status; False when the run is gone."""
+        return self._patch_status(names.RUN_PLURAL, namespace, name, status)
+
+    def patch_test_status(self, namespace: str, name: str, status: Mapping[str, Any]) -> bool:
+        """Merge-patch ``status`` into the UavTest's /status; False when the UavTest is gone."""
+        return self._patch_status(names.PLURAL, namespace, name, status)
+
+    def get_test(self, namespace: str, name: str) -> dict[str, Any] | None:
+        """The UavTest ``name``; None when there is none."""
+        try:
+            return self._custom.get_namespaced_custom_object(  # type: ignore[no-any-return]
+                names.API_GROUP, names.VERSION, namespace, names.PLURAL, name
+            )
+        except ApiException as e:
+            if e.status == 404:
+                return None
+            raise
+
+    def create_run(self, namespace: str, body: Mapping[str, Any]) -> bool:
+        """Create the UavTestRun; False when one of that name already exists."""
+        try:
+            self._custom.create_namespaced_custom_object(
+                names.API_GROUP, names.VERSION, namespace, names.RUN_PLURAL, body
+            )
+        except ApiException as e:
+            if e.status == 409:
+                return False
+            raise
+        return True
+
+    def patch_run_spec(self, namespace: str, name: str, spec: Mapping[str, Any]) -> dict[str, Any]:
+        """Merge-patch the UavTestRun's spec (only to fill in a hand-made run's testSpec)."""
+        return self._custom.patch_namespaced_custom_object(  # type: ignore[no-any-return]
+            names.API_GROUP, names.VERSION, namespace, names.RUN_PLURAL, name, {"spec": dict(spec)}
+        )
+
+    def delete_run(self, namespace: str, name: str) -> bool:
+        """Delete the UavTestRun (its Job, pods, ConfigMap and Secret follow: owner references)."""
+        try:
+            self._custom.delete_namespaced_custom_object(
+                names.API_GROUP,
+                names.VERSION,
+                namespace,
+                names.RUN_PLURAL,
+                name,
+                body={"propagationPolicy": "Background"},
             )
         except ApiException as e:
             if e.status == 404:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from enum import StrEnum
 
+from uavtest.spec.crd import RUN_KIND, RUN_PLURAL
 from uavtest.spec.models import API_GROUP, API_VERSION, KIND
 from uavtest.spec.status import ConditionReason, ConditionType, Phase
 
@@ -34,6 +35,9 @@ __all__ = [
     "MANAGER",
     "PLURAL",
     "PROGRESS_PREFIX",
+    "RERUN_ANNOTATION",
+    "RUN_KIND",
+    "RUN_PLURAL",
     "TEST_FILE",
     "TEST_MOUNT",
     "UPLOAD_EXPIRES_ANNOTATION",
@@ -45,10 +49,15 @@ __all__ = [
     "EventReason",
     "Phase",
     "Reason",
+    "Trigger",
 ]
 
 VERSION = API_VERSION.split("/", 1)[1]
 PLURAL = "uavtests"
+# RUN_PLURAL "uavtestruns", RUN_KIND "UavTestRun": one run of a UavTest, owned by it
+
+# Set it to any new value to run the test again (the value names the run: <test>-r<hash>).
+RERUN_ANNOTATION = f"{API_GROUP}/rerun"
 
 # kopf's own bookkeeping lives under our API group, not under kopf.zalando.org.
 FINALIZER = f"{API_GROUP}/finalizer"
@@ -63,7 +72,7 @@ LABEL_COMPONENT = "app.kubernetes.io/component"  # "replica" on Jobs, pods and C
 LABEL_PART_OF = "app.kubernetes.io/part-of"  # "uavtest"
 LABEL_MANAGED_BY = "app.kubernetes.io/managed-by"  # MANAGER
 LABEL_TEST = f"{API_GROUP}/test"  # the UavTest's name: maps a Job or pod to its parent
-LABEL_RUN = f"{API_GROUP}/run"  # the run id: one run per UavTest object (spec is immutable)
+LABEL_RUN = f"{API_GROUP}/run"  # the run id: one per UavTestRun object (its uid's head)
 # The replica index of a pod. Kubernetes stamps it on Indexed Job pods itself (JOB_INDEX_LABEL);
 # uavtest.io/replica is the name our metrics and docs use for the same number.
 LABEL_REPLICA = f"{API_GROUP}/replica"
@@ -83,6 +92,16 @@ UPLOAD_EXPIRES_ANNOTATION = f"{API_GROUP}/upload-expires"
 UPLOAD_PREFIX_ANNOTATION = f"{API_GROUP}/upload-prefix"
 
 
+class Trigger(StrEnum):
+    """Why a UavTestRun exists (its ``spec.trigger``)."""
+
+    CREATE = "create"  # the UavTest was created
+    SPEC_CHANGE = "spec-change"  # the UavTest's spec changed (a new metadata.generation)
+    RERUN = "rerun"  # the uavtest.io/rerun annotation got a new value
+    SCHEDULE = "schedule"  # spec.schedule came due
+    MANUAL = "manual"  # created by hand (kubectl create), not by the operator
+
+
 class Reason(StrEnum):
     """Condition reasons beyond the spec's ``ConditionReason`` (both are documented values)."""
 
@@ -93,12 +112,15 @@ class Reason(StrEnum):
     DEADLINE_EXCEEDED = "DeadlineExceeded"  # the Job hit activeDeadlineSeconds
     JOB_MISSING = "JobMissing"  # the Job disappeared before its replicas finished
     INVALID_SPEC = "InvalidSpec"  # the spec cannot run in a cluster (e.g. file references)
+    TEST_MISSING = "TestMissing"  # a UavTestRun names a UavTest that does not exist
 
 
 class EventReason(StrEnum):
     """Reasons of the Kubernetes Events the operator posts on a UavTest."""
 
     JOB_CREATED = "JobCreated"
+    RUN_CREATED = "RunCreated"  # on a UavTest: a UavTestRun was started
+    RUNS_DELETED = "RunsDeleted"  # on a UavTest: runs beyond the history limits were deleted
     TEST_PASSED = "TestPassed"
     TEST_FAILED = "TestFailed"
     FLAKY_TEST = "FlakyTest"

@@ -41,7 +41,7 @@ from uavtest.controller.kube import Kube
 from uavtest.controller.metrics import Metrics
 from uavtest.controller.settings import OperatorSettings
 from uavtest.controller.status import awaiting_aggregation, is_final, status_from
-from uavtest.controller.views import JobView, PodView, UavTestView, job_view, uavtest_view
+from uavtest.controller.views import JobView, PodView, RunView, job_view, run_view
 from uavtest.errors import BadInput, UavTestError
 from uavtest.spec.models import Metadata, UavTest, UavTestSpec
 from uavtest.spec.status import Condition, ConditionStatus, Phase, UavTestStatus
@@ -111,17 +111,35 @@ class Runtime:
 
 
 def parse_test(body: Mapping[str, Any]) -> UavTest:
-    """The UavTest model of a custom resource body; BadInput naming the field when it does not fit."""
+    """The UavTest model a UavTestRun flies (its frozen ``spec.testSpec``, named after its test);
+    BadInput naming the field when it does not fit."""
     meta = body.get("metadata", {})
+    run_spec = body.get("spec") or {}
     try:
         return UavTest(
-            metadata=Metadata(name=meta["name"], namespace=meta.get("namespace")),
-            spec=UavTestSpec.model_validate(body.get("spec") or {}),
+            metadata=Metadata(name=run_spec.get("testName") or meta["name"], namespace=meta.get("namespace")),
+            spec=UavTestSpec.model_validate(run_spec.get("testSpec") or {}),
         )
     except ValidationError as e:
         first = e.errors()[0]
-        where = "spec." + ".".join(str(p) for p in first["loc"])
+        where = "spec.testSpec." + ".".join(str(p) for p in first["loc"])
         raise BadInput(first["msg"], field=where) from e
+
+
+def _fill_spec(rt: Runtime, body: Mapping[str, Any], view: RunView) -> Mapping[str, Any]:
+    """A run created by hand without ``spec.testSpec``: copy its test's current spec into it.
+
+    BadInput when the test does not exist; the run then ends as InvalidSpec."""
+    test = rt.kube.get_test(view.namespace, view.test)
+    if test is None:
+        raise BadInput(
+            f"no UavTest {view.test} in namespace {view.namespace}", field="spec.testName", value=view.test
+        )
+    gen = int(test.get("metadata", {}).get("generation") or 1)
+    patched = rt.kube.patch_run_spec(
+        view.namespace, view.name, {"testSpec": test.get("spec") or {}, "testGeneration": gen}
+    )
+    return patched
 
 
 def job_of(jobs: Iterable[JobView], run_id: str) -> JobView | None:
@@ -138,7 +156,7 @@ def _same(old: Mapping[str, Any] | None, new: UavTestStatus) -> bool:
         return False
 
 
-def _write(rt: Runtime, book: Book, test: UavTestView, status: UavTestStatus) -> None:
+def _write(rt: Runtime, book: Book, test: RunView, status: UavTestStatus) -> None:
     previous = book.status if book.status is not None else test.status
     if _same(previous, status):
         return
@@ -148,7 +166,7 @@ def _write(rt: Runtime, book: Book, test: UavTestView, status: UavTestStatus) ->
 
 
 def _invalid(
-    rt: Runtime, body: Mapping[str, Any], test: UavTestView, message: str, logger: logging.Logger
+    rt: Runtime, body: Mapping[str, Any], test: RunView, message: str, logger: logging.Logger
 ) -> None:
     """A spec the cluster cannot run: final status Error with reason InvalidSpec, and an Event."""
     from datetime import UTC, datetime
@@ -167,6 +185,9 @@ def _invalid(
             (names.ConditionType.COMPLETE, ConditionStatus.TRUE),
             (names.ConditionType.SUCCEEDED, ConditionStatus.FALSE),
             (names.ConditionType.FAILED, ConditionStatus.TRUE),
+            (names.ConditionType.READY, ConditionStatus.FALSE),
+            (names.ConditionType.RECONCILING, ConditionStatus.FALSE),
+            (names.ConditionType.STALLED, ConditionStatus.TRUE),
         )
     ]
     status = UavTestStatus(
@@ -266,8 +287,11 @@ def ensure_upload_secret(
 def start_run(rt: Runtime, body: Mapping[str, Any], jobs: Iterable[JobView], logger: logging.Logger) -> None:
     """Create the run's ConfigMap, upload Secret and Job unless the Job exists (the Job index is the
     lookup), then status."""
-    view = uavtest_view(body)
+    view = run_view(body)
     try:
+        if not view.has_spec:
+            body = _fill_spec(rt, body, view)
+            view = run_view(body)
         test = parse_test(body)
         files = unresolved_files(test.spec)
         if files:
@@ -303,7 +327,7 @@ def start_run(rt: Runtime, body: Mapping[str, Any], jobs: Iterable[JobView], log
 
 
 def sync_run(
-    rt: Runtime, test: UavTestView, job: JobView | None, pods: Iterable[PodView], *, job_deleted: bool = False
+    rt: Runtime, test: RunView, job: JobView | None, pods: Iterable[PodView], *, job_deleted: bool = False
 ) -> None:
     """Recompute the status from the Job and pods; patch it when it changed (never a final one).
 
@@ -340,7 +364,7 @@ def aggregate(
     When the store cannot be reached the status says so (Complete False, StoreUnavailable) and the
     caller (a kopf timer) comes back later; a replica with missing artifacts is an ``error``.
     """
-    view = uavtest_view(body)
+    view = run_view(body)
     test = parse_test(body)
     book = rt.books.get((view.namespace, view.name))
     pods = list(pods)
@@ -353,7 +377,7 @@ def aggregate(
             from uavtest.engine.aggregate import aggregate_run
 
             summary = aggregate_run(
-                rt.store(), view.namespace, view.name, view.run_id, range(view.replicas), test.spec
+                rt.store(), view.namespace, view.test, view.run_id, range(view.replicas), test.spec
             )
         except UavTestError as e:
             rt.metrics.reconcile_errors.labels(handler="aggregate").inc()

@@ -32,7 +32,7 @@ from uavtest.analysis.flakiness import flakiness as flakiness_of
 from uavtest.analysis.models import RunSummary, Verdict
 from uavtest.controller.names import ConditionReason, ConditionType, Phase, Reason
 from uavtest.controller.progress import FINISHED, Progress, ReplicaState, progress_of
-from uavtest.controller.views import JobView, PodView, UavTestView
+from uavtest.controller.views import JobView, PodView, RunView
 from uavtest.engine.outcome import exit_code, run_warnings, summary_line
 from uavtest.errors import ExitCode
 from uavtest.spec.status import (
@@ -50,6 +50,7 @@ __all__ = [
     "artifacts_for",
     "awaiting_aggregation",
     "is_final",
+    "kstatus_conditions",
     "phase_of",
     "set_condition",
     "status_from",
@@ -109,21 +110,46 @@ def set_condition(
     return [*(c for c in conditions if c.type != type_), new]
 
 
-def artifacts_for(store_url: str, test: UavTestView, *, with_trajectories: bool) -> Artifacts:
+def kstatus_conditions(
+    conditions: list[Condition],
+    passed: bool | None,
+    reason: str,
+    message: str,
+    *,
+    generation: int,
+    now: datetime,
+) -> list[Condition]:
+    """``Ready`` / ``Reconciling`` / ``Stalled`` as kstatus (Flux, ``kstatus``) reads them.
+
+    ``passed`` None: in progress (Reconciling True → InProgress); True: Ready True, the others False
+    (→ Current); False: Stalled True (→ Failed). Reconciling and Stalled are "abnormal-true": they
+    are False, not absent, when the run is not in that state.
+    """
+    true, false = ConditionStatus.TRUE, ConditionStatus.FALSE
+    for type_, status in (
+        (ConditionType.READY, true if passed else false),
+        (ConditionType.RECONCILING, true if passed is None else false),
+        (ConditionType.STALLED, true if passed is False else false),
+    ):
+        conditions = set_condition(conditions, type_, status, reason, message, generation=generation, now=now)
+    return conditions
+
+
+def artifacts_for(store_url: str, test: RunView, *, with_trajectories: bool) -> Artifacts:
     """URIs of the run's prefix and aggregate files in the store."""
     base = store_url.rstrip("/")
 
     def uri(key: str) -> str:
         return f"{base}/{key}"
 
-    prefix = uri(run_prefix(test.namespace, test.name, test.run_id))
+    prefix = uri(run_prefix(test.namespace, test.test, test.run_id))
     return Artifacts(
         store=prefix,
-        summary=uri(aggregate_key(test.namespace, test.name, test.run_id, SUMMARY)),
-        average=uri(aggregate_key(test.namespace, test.name, test.run_id, AVERAGE))
+        summary=uri(aggregate_key(test.namespace, test.test, test.run_id, SUMMARY)),
+        average=uri(aggregate_key(test.namespace, test.test, test.run_id, AVERAGE))
         if with_trajectories
         else None,
-        plot=uri(aggregate_key(test.namespace, test.name, test.run_id, PLOT)) if with_trajectories else None,
+        plot=uri(aggregate_key(test.namespace, test.test, test.run_id, PLOT)) if with_trajectories else None,
     )
 
 
@@ -139,7 +165,7 @@ def phase_of(summary: RunSummary) -> tuple[Phase, str]:
     return Phase.ERROR, Reason.BENCH_ERRORS
 
 
-def _previous(test: UavTestView) -> UavTestStatus:
+def _previous(test: RunView) -> UavTestStatus:
     try:
         return UavTestStatus.model_validate(test.status)
     except ValidationError:
@@ -156,7 +182,7 @@ def _parse_time(text: str | None) -> datetime | None:
 
 
 def _running_status(
-    test: UavTestView,
+    test: RunView,
     progress: Progress,
     previous: UavTestStatus,
     job: JobView | None,
@@ -186,6 +212,7 @@ def _running_status(
     )
     for type_ in (ConditionType.SUCCEEDED, ConditionType.FAILED, ConditionType.FLAKY):
         conds = set_condition(conds, type_, ConditionStatus.UNKNOWN, reason, message, generation=gen, now=now)
+    conds = kstatus_conditions(conds, None, reason, message, generation=gen, now=now)
     finished = [
         ReplicaStatus(
             index=r.index,
@@ -221,7 +248,7 @@ def _running_status(
 
 
 def _final_status(
-    test: UavTestView,
+    test: RunView,
     progress: Progress,
     previous: UavTestStatus,
     job: JobView | None,
@@ -245,6 +272,7 @@ def _final_status(
         (ConditionType.FLAKY, true if summary.flaky else false, flaky_reason, flaky_note),
     ):
         conds = set_condition(conds, ctype, cstatus, creason, message, generation=gen, now=now)
+    conds = kstatus_conditions(conds, ok, reason, line, generation=gen, now=now)
     why = {r.index: r.reason for r in progress.replicas if r.reason}
     entries = []
     for r in summary.results:
@@ -285,7 +313,7 @@ def _final_status(
 
 
 def status_from(
-    test: UavTestView,
+    test: RunView,
     job: JobView | None,
     pods: Iterable[PodView],
     *,

@@ -17,11 +17,13 @@ from uavtest.controller.jobs import run_id_for
 __all__ = [
     "JobView",
     "PodView",
-    "UavTestView",
+    "RunView",
+    "TestView",
     "job_view",
     "parse_indexes",
     "pod_view",
-    "uavtest_view",
+    "run_view",
+    "test_view",
 ]
 
 
@@ -29,16 +31,37 @@ class _View(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
 
-class UavTestView(_View):
-    """A UavTest as the status logic needs it."""
+class RunView(_View):
+    """A UavTestRun as the status logic needs it (``name`` is the run's, ``test`` its UavTest's)."""
 
     namespace: str
     name: str
+    test: str
     uid: str
     run_id: str
     generation: int
     replicas: int
     seed: int
+    trigger: str | None = None
+    created: str = ""
+    has_spec: bool = True  # spec.testSpec is there (a run created by hand may leave it out)
+    status: dict[str, Any]
+
+
+class TestView(_View):
+    """A UavTest as the run scheduling and the metrics need it (not its flight spec)."""
+
+    __test__ = False  # not a pytest class
+
+    namespace: str
+    name: str
+    uid: str
+    generation: int
+    created: str
+    schedule: str | None
+    successful_limit: int
+    failed_limit: int
+    rerun: str | None  # the uavtest.io/rerun annotation
     status: dict[str, Any]
 
 
@@ -93,19 +116,44 @@ def _labels(body: Mapping[str, Any]) -> Mapping[str, str]:
     return body.get("metadata", {}).get("labels") or {}
 
 
-def uavtest_view(body: Mapping[str, Any]) -> UavTestView:
+def run_view(body: Mapping[str, Any]) -> RunView:
     meta = body.get("metadata", {})
-    spec = body.get("spec") or {}
-    return UavTestView(
+    run_spec = body.get("spec") or {}
+    spec = run_spec.get("testSpec") or {}
+    return RunView(
         namespace=meta.get("namespace") or "default",
         name=meta["name"],
+        test=str(run_spec.get("testName") or meta["name"]),
         uid=meta["uid"],
         run_id=run_id_for(meta["uid"]),
         generation=int(meta.get("generation") or 1),
         replicas=int(spec.get("replicas") or 1),
         seed=int(spec.get("seed") or 0),
+        trigger=run_spec.get("trigger"),
+        created=meta.get("creationTimestamp") or "",
+        has_spec="testSpec" in run_spec,
         status=dict(body.get("status") or {}),
     )
+
+
+def test_view(body: Mapping[str, Any]) -> TestView:
+    meta = body.get("metadata", {})
+    spec = body.get("spec") or {}
+    return TestView(
+        namespace=meta.get("namespace") or "default",
+        name=meta["name"],
+        uid=meta.get("uid") or "",
+        generation=int(meta.get("generation") or 1),
+        created=meta.get("creationTimestamp") or "",
+        schedule=spec.get("schedule"),
+        successful_limit=int(spec.get("successfulRunsHistoryLimit", 3)),
+        failed_limit=int(spec.get("failedRunsHistoryLimit", 3)),
+        rerun=(meta.get("annotations") or {}).get(names.RERUN_ANNOTATION),
+        status=dict(body.get("status") or {}),
+    )
+
+
+test_view.__test__ = False  # type: ignore[attr-defined]
 
 
 def job_view(body: Mapping[str, Any]) -> JobView:

@@ -575,6 +575,33 @@ class UavTestSpec(Model):
         description="failures injected on the vehicle clock (MAV_CMD_INJECT_FAILURE; sets SYS_FAILURE_EN=1)",
     )
     assertions: Assertions = Field(default_factory=Assertions)
+    schedule: str | None = Field(
+        None,
+        max_length=256,
+        description="cron schedule (5 fields, UTC) of runs in a cluster, e.g. '0 3 * * *'; "
+        "unset: a run per spec change or re-run request only",
+    )
+    successful_runs_history_limit: int = Field(
+        3, ge=0, le=100, description="finished passing runs kept in the cluster (newest first)"
+    )
+    failed_runs_history_limit: int = Field(
+        3, ge=0, le=100, description="finished failing or erroring runs kept in the cluster (newest first)"
+    )
+
+    @field_validator("schedule")
+    @classmethod
+    def _cron(cls, value: str | None) -> str | None:
+        if value is None:
+            return None
+        from datetime import UTC, datetime
+
+        from cronsim import CronSim, CronSimError
+
+        try:
+            CronSim(value, datetime(2000, 1, 1, tzinfo=UTC))
+        except CronSimError as e:
+            raise ValueError(f"not a cron schedule ({e}): use 5 fields, e.g. '*/30 * * * *'") from None
+        return value
 
     @model_validator(mode="after")
     def _mission_or_commands(self) -> UavTestSpec:

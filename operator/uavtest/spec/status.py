@@ -25,9 +25,11 @@ __all__ = [
     "ConditionReason",
     "ConditionStatus",
     "ConditionType",
+    "LastRun",
     "Phase",
     "ReplicaStatus",
     "ReplicaVerdict",
+    "TestStatus",
     "UavTestStatus",
     "compact_results",
 ]
@@ -69,6 +71,10 @@ class ConditionType(StrEnum):
     SUCCEEDED = "Succeeded"  # True when every replica passed; False once the run ended otherwise
     FAILED = "Failed"  # True when the run ended with a failing replica or only errors
     FLAKY = "Flaky"  # True when the valid replicas both passed and failed
+    # kstatus (sigs.k8s.io/cli-utils) conventions that Flux and `kubectl wait` read without custom code:
+    READY = "Ready"  # True when the (last) run passed
+    RECONCILING = "Reconciling"  # abnormal-true: a run is in progress (kstatus InProgress)
+    STALLED = "Stalled"  # abnormal-true: the (last) run failed or ended in errors (kstatus Failed)
 
 
 class ConditionReason(StrEnum):
@@ -83,6 +89,11 @@ class ConditionReason(StrEnum):
     STABLE = "StableReplicas"
     AGGREGATION_FAILED = "AggregationFailed"
     JOB_FAILED = "JobFailed"
+    RUN_PASSED = "RunPassed"
+    RUN_FAILED = "RunFailed"
+    RUN_ERROR = "RunError"
+    RUN_IN_PROGRESS = "RunInProgress"
+    NO_RUN = "NoRunYet"
 
 
 class Condition(Model):
@@ -170,6 +181,48 @@ class UavTestStatus(Model):
             cut = MAX_WARNING_LENGTH - 1
             return [w if len(w) <= MAX_WARNING_LENGTH else w[:cut] + "…" for w in value[:MAX_WARNINGS]]
         return value
+
+
+class LastRun(Model):
+    """The newest run of a test, in brief (the UavTestRun object has the details)."""
+
+    name: str = Field(description="the UavTestRun's name")
+    phase: Phase = Phase.PENDING
+    trigger: str | None = Field(None, description="create, spec-change, rerun, schedule or manual")
+    passed: int = Field(0, ge=0)
+    failed: int = Field(0, ge=0)
+    errors: int = Field(0, ge=0)
+    flakiness: float | None = Field(None, ge=0, le=1)
+    flaky: bool = False
+    completion_time: datetime | None = None
+    summary: str | None = Field(None, description="aggregate/summary.json of that run in the store")
+
+
+class TestStatus(Model):
+    """The status of a UavTest: a summary of its runs (each run is a UavTestRun it owns)."""
+
+    __test__ = False  # not a pytest class
+
+    phase: Phase = Field(Phase.PENDING, description="the phase of the newest run")
+    observed_generation: int | None = Field(
+        None, ge=0, description="metadata.generation whose run has been started"
+    )
+    spec_hash: str | None = Field(None, description="hash of the flown spec of the newest spec run")
+    last_rerun: str | None = Field(None, description="the uavtest.io/rerun annotation value last acted on")
+    last_schedule_time: datetime | None = Field(
+        None, description="the newest scheduled time a run was started for"
+    )
+    last_run: LastRun | None = None
+    runs: int = Field(0, ge=0, description="runs kept in the cluster")
+    active: int = Field(0, ge=0, description="runs not finished")
+    succeeded: int = Field(0, ge=0, description="kept runs that passed")
+    failed: int = Field(0, ge=0, description="kept runs that failed or ended in bench errors")
+    flaky_runs: int = Field(0, ge=0, description="kept finished runs that were flaky")
+    flaky_rate: float | None = Field(
+        None, ge=0, le=1, description="flaky runs / finished runs among the kept runs"
+    )
+    message: str | None = Field(None, max_length=4096)
+    conditions: list[Condition] = Field(default_factory=list, max_length=16)
 
 
 def compact_results(results: Iterable[ReplicaStatus]) -> tuple[list[ReplicaStatus], int]:

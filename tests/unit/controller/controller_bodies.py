@@ -1,4 +1,8 @@
-"""Bodies of UavTests, Jobs and pods as the API server returns them (camelCase dicts)."""
+"""Bodies of UavTests, UavTestRuns, Jobs and pods as the API server returns them (camelCase dicts).
+
+``uavtest_body`` is a run (``UavTestRun``) of the test ``name``: the object that owns the Job and
+carries the run's status; ``test_body`` is the ``UavTest`` itself.
+"""
 
 from __future__ import annotations
 
@@ -27,17 +31,50 @@ def uavtest_body(
     body_spec.update(spec)
     return {
         "apiVersion": "uavtest.io/v1alpha1",
+        "kind": "UavTestRun",
+        "metadata": {
+            "name": f"{name}-g1",
+            "namespace": namespace,
+            "uid": UID,
+            "generation": 1,
+            "creationTimestamp": "2025-01-01T10:00:00Z",
+            "labels": {"team": "a"},
+        },
+        "spec": {"testName": name, "testGeneration": 1, "trigger": "create", "testSpec": body_spec},
+        "status": status or {},
+    }
+
+
+def test_body(
+    name: str = "hover",
+    namespace: str = "team-a",
+    *,
+    generation: int = 1,
+    status: dict[str, Any] | None = None,
+    annotations: dict[str, str] | None = None,
+    created: str = "2025-01-01T10:00:00Z",
+    **spec: Any,
+) -> dict[str, Any]:
+    """A UavTest body (the long-lived test)."""
+    run = uavtest_body(name, namespace)
+    body_spec = {**run["spec"]["testSpec"], **spec}
+    return {
+        "apiVersion": "uavtest.io/v1alpha1",
         "kind": "UavTest",
         "metadata": {
             "name": name,
             "namespace": namespace,
-            "uid": UID,
-            "generation": 1,
-            "labels": {"team": "a"},
+            "uid": "0a1b2c3d-0000-4000-8000-000000000001",
+            "generation": generation,
+            "creationTimestamp": created,
+            "annotations": annotations or {},
         },
         "spec": body_spec,
         "status": status or {},
     }
+
+
+test_body.__test__ = False  # type: ignore[attr-defined]
 
 
 def job_body(

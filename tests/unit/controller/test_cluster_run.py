@@ -30,7 +30,7 @@ from uavtest.controller.cluster_run import (
 )
 from uavtest.controller.reconcile import parse_test
 from uavtest.controller.status import status_from
-from uavtest.controller.views import job_view, pod_view, uavtest_view
+from uavtest.controller.views import job_view, pod_view, run_view
 from uavtest.errors import BadInput, ExitCode, UavTestError
 from uavtest.run_options import Engine, ignored_options, ignored_warning
 from uavtest.spec.loaders import load_test
@@ -50,7 +50,7 @@ def final(*verdicts: Verdict) -> dict[str, object]:
         for i, v in enumerate(verdicts)
     ]
     summary = summarize(results, test="hover", namespace="team-a", run_id="5f0c3a9e")
-    test = uavtest_view(uavtest_body(replicas=len(verdicts)))
+    test = run_view(uavtest_body(replicas=len(verdicts)))
     return status_from(test, None, [], store_url="s3://b", summary=summary).dump()
 
 
@@ -77,7 +77,7 @@ def test_a_spec_the_cluster_cannot_run_exits_as_bad_input() -> None:
 
 
 def test_progress_line_counts_replicas() -> None:
-    test = uavtest_view(uavtest_body(replicas=4))
+    test = run_view(uavtest_body(replicas=4))
     pods = [pod_view(pod_body(0, "Running")), pod_view(pod_body(1, "Succeeded", exit_code=0))]
     st = status_from(
         test, job_view(job_body(completed="1", active=1)), [p for p in pods if p], store_url="s3://b"
@@ -86,7 +86,7 @@ def test_progress_line_counts_replicas() -> None:
 
 
 def test_a_body_that_does_not_fit_the_model_names_the_field() -> None:
-    with pytest.raises(BadInput, match=r"spec\.replicas"):
+    with pytest.raises(BadInput, match=r"spec\.testSpec\.replicas"):
         parse_test(uavtest_body(replicas=0))
 
 
@@ -157,7 +157,7 @@ def test_options_an_engine_does_not_use_are_named() -> None:
 def test_the_timeout_message_says_the_test_runs_on_and_how_to_follow_it() -> None:
     text = still_running_message("hover-x7k2p", "ci", {"phase": "Running", "running": 2}, 30)
     assert "30 s" in text and "still running" in text
-    assert "kubectl get uavtest/hover-x7k2p -n ci -w" in text
+    assert "kubectl get uavtestrun/hover-x7k2p -n ci -w" in text
 
 
 def test_the_store_is_the_run_uri_without_the_run_prefix() -> None:

@@ -155,7 +155,7 @@ def test_children_are_owned_by_and_labelled_for_their_test() -> None:
     body = uavtest_body()
     job = make_job(body)
     ref = job["metadata"]["ownerReferences"][0]
-    assert (ref["kind"], ref["name"], ref["uid"], ref["controller"]) == ("UavTest", "hover", UID, True)
+    assert (ref["kind"], ref["name"], ref["uid"], ref["controller"]) == ("UavTestRun", "hover-g1", UID, True)
     assert job["metadata"]["namespace"] == "team-a"
     for labels in (job["metadata"]["labels"], job["spec"]["template"]["metadata"]["labels"]):
         assert labels["uavtest.io/test"] == "hover"

@@ -12,14 +12,25 @@ from uavtest.analysis.flakiness import summarize
 from uavtest.analysis.models import FlightMetrics, ReplicaResult, Verdict
 from uavtest.controller.events import events_for
 from uavtest.controller.metrics import Metrics
-from uavtest.controller.views import UavTestView, uavtest_view
+from uavtest.controller.views import TestView, test_view
 from uavtest.spec.status import Phase
 
-from .controller_bodies import RUN, uavtest_body
+from .controller_bodies import RUN, test_body
 
 
-def view(name: str, status: dict[str, object]) -> UavTestView:
-    return uavtest_view(uavtest_body(name=name, status=status))
+def view(name: str, status: dict[str, object]) -> TestView:
+    return test_view(test_body(name=name, status=status))
+
+
+def last_run(phase: str, passed: int, failed: int, errors: int, flakiness: float | None) -> dict[str, object]:
+    return {
+        "name": "r",
+        "phase": phase,
+        "passed": passed,
+        "failed": failed,
+        "errors": errors,
+        "flakiness": flakiness,
+    }
 
 
 def result(index: int, verdict: Verdict, distance: float = 2.0, wall: float = 42.0) -> ReplicaResult:
@@ -28,16 +39,30 @@ def result(index: int, verdict: Verdict, distance: float = 2.0, wall: float = 42
 
 
 @pytest.fixture
-def tests_now() -> list[UavTestView]:
+def tests_now() -> list[TestView]:
     return [
-        view("flaky", {"phase": "Failed", "passed": 3, "failed": 1, "errors": 1, "flakiness": 0.25}),
-        view("steady", {"phase": "Succeeded", "passed": 5, "failed": 0, "errors": 0, "flakiness": 0.0}),
+        view(
+            "flaky",
+            {
+                "phase": "Failed",
+                "lastRun": last_run("Failed", 3, 1, 1, 0.25),
+                "runs": 4,
+                "succeeded": 2,
+                "failed": 2,
+                "flakyRuns": 1,
+                "flakyRate": 0.25,
+            },
+        ),
+        view(
+            "steady",
+            {"phase": "Succeeded", "lastRun": last_run("Succeeded", 5, 0, 0, 0.0), "runs": 1, "succeeded": 1},
+        ),
         view("starting", {"phase": "Pending"}),
     ]
 
 
 @pytest.fixture
-def metrics(tests_now: list[UavTestView]) -> Iterator[tuple[Metrics, int]]:
+def metrics(tests_now: list[TestView]) -> Iterator[tuple[Metrics, int]]:
     m = Metrics(lambda: list(tests_now))
     port = m.serve(0, addr="127.0.0.1")
     yield m, port
@@ -55,18 +80,23 @@ def scrape(port: int) -> dict[tuple[str, tuple[tuple[str, str], ...]], float]:
 
 
 def test_test_series_are_computed_from_the_resources_at_scrape_time(
-    metrics: tuple[Metrics, int], tests_now: list[UavTestView]
+    metrics: tuple[Metrics, int], tests_now: list[TestView]
 ) -> None:
     _, port = metrics
     got = scrape(port)
-    ns = ("namespace", "team-a")
-    assert got[("uavtest_replicas_total", (ns, ("test", "flaky"), ("verdict", "fail")))] == 1
-    assert got[("uavtest_replicas_total", (ns, ("test", "flaky"), ("verdict", "pass")))] == 3
-    assert got[("uavtest_replicas_total", (ns, ("test", "flaky"), ("verdict", "error")))] == 1
-    assert got[("uavtest_test_flakiness", (ns, ("test", "flaky")))] == 0.25
-    assert got[("uavtest_test_flakiness", (ns, ("test", "steady")))] == 0.0
-    assert ("uavtest_test_flakiness", (ns, ("test", "starting"))) not in got  # no valid replica yet
-    assert got[("uavtest_tests", (ns, ("phase", "Pending")))] == 1
+    ns = ("test_namespace", "team-a")  # not "namespace": scrape setups overwrite that one
+    flaky = (("test", "flaky"), ns)
+    assert got[("uavtest_test_last_run_replicas", (*flaky, ("verdict", "fail")))] == 1
+    assert got[("uavtest_test_last_run_replicas", (*flaky, ("verdict", "pass")))] == 3
+    assert got[("uavtest_test_last_run_replicas", (*flaky, ("verdict", "error")))] == 1
+    assert got[("uavtest_test_last_run_flakiness", flaky)] == 0.25
+    assert got[("uavtest_test_last_run_flakiness", (("test", "steady"), ns))] == 0.0
+    assert ("uavtest_test_last_run_flakiness", (("test", "starting"), ns)) not in got  # no run yet
+    assert got[("uavtest_test_flaky_rate", flaky)] == 0.25
+    assert got[("uavtest_test_kept_runs", (("result", "failed"), *flaky))] == 2
+    assert got[("uavtest_tests", (("phase", "Pending"), ns))] == 1
+    # gauges, not counters: computed from the current status (a run's replicas, not a running total)
+    assert "uavtest_test_last_run_replicas_total" not in {name for name, _ in got}
     # a deleted test leaves no stale series
     tests_now.pop(0)
     again = scrape(port)
@@ -88,8 +118,9 @@ def test_aggregated_runs_are_counted_and_observed(metrics: tuple[Metrics, int]) 
     m.record_run(summary, "failed")
     m.reconcile_errors.labels(handler="aggregate").inc()
     got = scrape(port)
-    ns = ("namespace", "team-a")
-    assert got[("uavtest_runs_total", (ns, ("result", "failed")))] == 1
+    ns = ("test_namespace", "team-a")
+    assert got[("uavtest_test_runs_total", (("result", "failed"), ("test", "flaky"), ns))] == 1
+    assert got[("uavtest_test_flaky_runs_total", (("test", "flaky"), ns))] == 1
     assert got[("uavtest_min_obstacle_distance_meters_count", (ns,))] == 2  # errors have no distance
     assert got[("uavtest_min_obstacle_distance_meters_bucket", (("le", "0.5"), ns))] == 1
     assert got[("uavtest_min_obstacle_distance_meters_sum", (ns,))] == pytest.approx(2.9)
@@ -100,10 +131,10 @@ def test_aggregated_runs_are_counted_and_observed(metrics: tuple[Metrics, int]) 
 
 def test_two_operators_in_one_process_have_separate_registries() -> None:
     a, b = Metrics(list), Metrics(list)
-    a.runs.labels(namespace="x", result="succeeded").inc()
-    assert (
-        b.registry.get_sample_value("uavtest_runs_total", {"namespace": "x", "result": "succeeded"}) is None
-    )
+    a.runs.labels("x", "t", "succeeded").inc()
+    labels = {"test_namespace": "x", "test": "t", "result": "succeeded"}
+    assert a.registry.get_sample_value("uavtest_test_runs_total", labels) == 1
+    assert b.registry.get_sample_value("uavtest_test_runs_total", labels) is None
 
 
 def test_events_of_a_flaky_failing_run() -> None:

@@ -8,7 +8,7 @@ from typing import Any
 from uavtest.analysis.flakiness import summarize
 from uavtest.analysis.models import FlightMetrics, ReplicaResult, RunSummary, Verdict
 from uavtest.controller.status import awaiting_aggregation, is_final, status_from
-from uavtest.controller.views import job_view, parse_indexes, pod_view, uavtest_view
+from uavtest.controller.views import job_view, parse_indexes, pod_view, run_view
 from uavtest.spec.status import UavTestStatus
 
 from .controller_bodies import RUN, job_body, pod_body, uavtest_body
@@ -26,7 +26,7 @@ def status(
     now: datetime = T0,
     **kw: Any,
 ) -> UavTestStatus:
-    test = uavtest_view(uavtest_body(replicas=replicas, status=previous))
+    test = run_view(uavtest_body(replicas=replicas, status=previous))
     views = [v for v in (pod_view(p) for p in pods) if v is not None]
     return status_from(test, job_view(job) if job else None, views, store_url=STORE, now=now, **kw)
 
@@ -263,3 +263,16 @@ def test_what_the_run_could_not_simulate_is_in_the_status_and_an_event() -> None
         for e in events_for(summary_of(result(0, Verdict.PASS)), Phase.SUCCEEDED)
         if e.reason == "SimulatorLimits"
     ]
+
+
+def test_a_runs_conditions_follow_kstatus_running_passed_failed() -> None:
+    """Reconciling while replicas fly (kstatus InProgress), Ready once passed (Current), Stalled
+    once failed (Failed); the abnormal-true types are False, not absent, otherwise."""
+    running = status(job_body(active=2), [pod_body(0, "Running")])
+    assert cond(running, "Reconciling")[0] == "True" and cond(running, "Ready")[0] == "False"
+    assert cond(running, "Stalled")[0] == "False"
+    passed = status(None, [], summary=summary_of(result(0, Verdict.PASS), result(1, Verdict.PASS)))
+    assert [cond(passed, t)[0] for t in ("Ready", "Reconciling", "Stalled")] == ["True", "False", "False"]
+    failed = status(None, [], summary=summary_of(result(0, Verdict.PASS), result(1, Verdict.FAIL)))
+    assert [cond(failed, t)[0] for t in ("Ready", "Reconciling", "Stalled")] == ["False", "False", "True"]
+    assert passed.observed_generation == 1

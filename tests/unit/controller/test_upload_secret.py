@@ -123,7 +123,7 @@ def test_the_upload_secret_is_owned_by_the_test_and_says_only_when_and_where_out
     assert meta["name"] == upload_secret_name("hover", RUN) == f"hover-{RUN}-upload"
     assert meta["namespace"] == "team-a"
     assert [(r["kind"], r["uid"], r["controller"]) for r in meta["ownerReferences"]] == [
-        ("UavTest", UID, True)
+        ("UavTestRun", UID, True)
     ]
     assert owned_by(meta, UID) and not owned_by(meta, "another-uid")
     assert meta["labels"][names.LABEL_RUN] == RUN

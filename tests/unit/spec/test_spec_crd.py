@@ -11,7 +11,7 @@ import pytest
 import yaml
 from pydantic import ValidationError
 
-from uavtest.spec.crd import IMMUTABLE_MESSAGE, crd, crd_yaml
+from uavtest.spec.crd import IMMUTABLE_MESSAGE, crd, crd_yaml, run_crd
 from uavtest.spec.loaders import load_test
 from uavtest.spec.models import UavTestSpec
 from uavtest.spec.render import render
@@ -22,6 +22,7 @@ from uavtest.spec.status import (
     ConditionStatus,
     ReplicaStatus,
     ReplicaVerdict,
+    TestStatus,
     UavTestStatus,
     compact_results,
 )
@@ -49,7 +50,7 @@ def test_crd_command_prints_the_generated_crd(uavtest) -> None:
     result = uavtest("crd")
     assert result.returncode == 0
     assert result.stdout == crd_yaml()
-    assert yaml.safe_load(result.stdout) == crd()
+    assert list(yaml.safe_load_all(result.stdout)) == [crd(), run_crd()]
 
 
 def _walk(node: dict[str, Any], path: str, seen: list[str]) -> None:
@@ -98,7 +99,9 @@ def test_schema_has_every_model_field() -> None:
 
     spec = _schema()["properties"]["spec"]["properties"]
     assert set(spec) == fields(UavTestSpec)
-    assert set(_schema()["properties"]["status"]["properties"]) == fields(UavTestStatus)
+    assert set(_schema()["properties"]["status"]["properties"]) == fields(TestStatus)
+    run_schema = run_crd()["spec"]["versions"][0]["schema"]["openAPIV3Schema"]
+    assert set(run_schema["properties"]["status"]["properties"]) == fields(UavTestStatus)
 
 
 def test_crd_names_subresources_and_columns() -> None:
@@ -111,21 +114,34 @@ def test_crd_names_subresources_and_columns() -> None:
     assert version["subresources"] == {"status": {}}
     assert version["served"] and version["storage"]
     columns = {c["name"]: c for c in version["additionalPrinterColumns"]}
-    for name in ("Phase", "Replicas", "Passed", "Failed", "Flakiness", "Age"):
+    for name in ("Phase", "Last-Run", "Flakiness", "Runs", "Flaky-Rate", "Age"):
         assert name in columns and columns[name].get("priority", 0) == 0
     assert columns["Phase"]["jsonPath"] == ".status.phase"
     assert columns["Age"]["type"] == "date"
-    assert columns["Succeeded"]["jsonPath"] == '.status.conditions[?(@.type=="Succeeded")].status'
-    # columns point at fields the status schema has
-    status = _schema()["properties"]["status"]["properties"]
-    for column in columns.values():
-        if column["jsonPath"].startswith(".status.") and "[" not in column["jsonPath"]:
-            assert column["jsonPath"].removeprefix(".status.") in status
+    run = run_crd()["spec"]
+    assert run["names"]["kind"] == "UavTestRun" and run["names"]["shortNames"] == ["uavtr"]
+    run_columns = {c["name"]: c for c in run["versions"][0]["additionalPrinterColumns"]}
+    for name in ("Test", "Phase", "Replicas", "Passed", "Failed", "Flakiness", "Age"):
+        assert name in run_columns and run_columns[name].get("priority", 0) == 0
+    assert run_columns["Succeeded"]["jsonPath"] == '.status.conditions[?(@.type=="Succeeded")].status'
+    # columns point at fields the status schemas have
+    for doc, cols in ((crd(), columns), (run_crd(), run_columns)):
+        props = doc["spec"]["versions"][0]["schema"]["openAPIV3Schema"]["properties"]["status"]["properties"]
+        for column in cols.values():
+            path = column["jsonPath"]
+            if path.startswith(".status.") and "[" not in path:
+                head, _, tail = path.removeprefix(".status.").partition(".")
+                assert head in props and (not tail or tail in props[head]["properties"])
 
 
-def test_spec_is_immutable() -> None:
+def test_a_tests_spec_may_change_and_a_runs_spec_is_frozen() -> None:
     rules = _schema()["properties"]["spec"]["x-kubernetes-validations"]
-    assert {"rule": "self == oldSelf", "message": IMMUTABLE_MESSAGE} in rules
+    assert not any("oldSelf" in r["rule"] for r in rules)  # GitOps edits a test in place
+    run_rules = run_crd()["spec"]["versions"][0]["schema"]["openAPIV3Schema"]["properties"]["spec"][
+        "x-kubernetes-validations"
+    ]
+    assert [r["message"] for r in run_rules] == [IMMUTABLE_MESSAGE]
+    assert run_rules[0]["rule"].startswith("self == oldSelf")
 
 
 def test_cross_field_rules_mirror_the_model_validators() -> None:
