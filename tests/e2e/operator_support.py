@@ -38,7 +38,8 @@ SA = "uavtest-operator"
 
 def install_crd(cluster: Cluster) -> None:
     cluster.kubectl("apply", "-f", str(CRD))
-    cluster.kubectl("wait", "--for=condition=Established", "crd/uavtests.uavtest.io", "--timeout=60s")
+    for crd in ("crd/uavtests.uavtest.io", "crd/uavtestruns.uavtest.io"):
+        cluster.kubectl("wait", "--for=condition=Established", crd, "--timeout=60s")
 
 
 def assert_no_root_credentials(cluster: Cluster, namespace: str, minio: MinioServer) -> list[dict[str, Any]]:
@@ -261,26 +262,51 @@ class Operator:
         return None
 
 
+def first_run(test: str) -> str:
+    """The name of the run the operator starts when a test is created: ``<test>-g1``."""
+    return f"{test}-g1"
+
+
+def wait_exists(cluster: Cluster, namespace: str, obj: str, timeout: float = 120) -> None:
+    """Until ``kind/name`` exists (kubectl wait needs the object to be there first)."""
+    assert cluster.wait_until(
+        lambda: cluster.kubectl("get", obj, "-n", namespace, "-o", "name", check=False) != "",
+        timeout,
+        interval=1.0,
+    ), f"{obj} never appeared"
+
+
 def wait_status(
-    cluster: Cluster, namespace: str, name: str, jsonpath: str, value: str, timeout: float
+    cluster: Cluster,
+    namespace: str,
+    name: str,
+    jsonpath: str,
+    value: str,
+    timeout: float,
+    kind: str = "uavtestrun",
 ) -> None:
-    """kubectl wait --for=jsonpath=... on a UavTest (no polling in the test itself)."""
+    """kubectl wait --for=jsonpath=... on a UavTestRun (default) or a UavTest (no polling in the test)."""
+    wait_exists(cluster, namespace, f"{kind}/{name}")
     cluster.kubectl(
         "wait",
         "-n",
         namespace,
-        f"uavtest/{name}",
+        f"{kind}/{name}",
         f"--for=jsonpath={jsonpath}={value}",
         f"--timeout={int(timeout)}s",
         timeout=timeout + 30,
     )
 
 
-def wait_complete(cluster: Cluster, namespace: str, name: str, timeout: float = 900) -> dict[str, Any]:
+def wait_complete(
+    cluster: Cluster, namespace: str, test: str, timeout: float = 900, *, run: str | None = None
+) -> dict[str, Any]:
+    """The final status of a run of TEST (default: its first run, ``<test>-g1``)."""
+    run = run or first_run(test)
     wait_status(
-        cluster, namespace, name, '{.status.conditions[?(@.type=="Complete")].status}', "True", timeout
+        cluster, namespace, run, '{.status.conditions[?(@.type=="Complete")].status}', "True", timeout
     )
-    return cluster.kubectl_json("get", "uavtest", name, "-n", namespace)["status"]
+    return cluster.kubectl_json("get", "uavtestrun", run, "-n", namespace)["status"]
 
 
 def store_keys(minio: MinioServer, bucket: str, prefix: str) -> list[str]:
@@ -300,8 +326,8 @@ def running_operator(
 ) -> Iterator[Operator]:
     """`uavtest operator` under the chart's least-privilege RBAC, storing to ``bucket``.
 
-    On exit the module's UavTests are deleted while the operator still runs (it removes its
-    finalizer from them), then the operator stops.
+    On exit the module's UavTests (and their UavTestRuns) are deleted while the operator still runs
+    (it removes its finalizer from them), then the operator stops.
     """
     install_crd(cluster)
     op = Operator(
@@ -318,7 +344,8 @@ def running_operator(
     try:
         yield op
     finally:
-        cluster.kubectl(
-            "delete", "uavtests", "--all", "-n", namespace, "--timeout=120s", check=False, timeout=150
-        )
+        for kind in ("uavtests", "uavtestruns"):  # a test's runs go with it (owner references)
+            cluster.kubectl(
+                "delete", kind, "--all", "-n", namespace, "--timeout=120s", check=False, timeout=150
+            )
         op.stop()

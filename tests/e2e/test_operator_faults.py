@@ -12,6 +12,7 @@ import yaml
 
 from e2e.operator_support import (
     Operator,
+    first_run,
     fresh_bucket,
     running_operator,
     store_keys,
@@ -57,6 +58,12 @@ def hover(name: str, namespace: str, *, replicas: int, parallelism: int, hold: f
     return doc
 
 
+def runs_of(cluster: Cluster, namespace: str, name: str) -> list[dict[str, Any]]:
+    return cluster.kubectl_json("get", "uavtestruns", "-n", namespace, "-l", f"uavtest.io/test={name}")[
+        "items"
+    ]
+
+
 def jobs_of(cluster: Cluster, namespace: str, name: str) -> list[dict[str, Any]]:
     return cluster.kubectl_json("get", "jobs", "-n", namespace, "-l", f"uavtest.io/test={name}")["items"]
 
@@ -96,6 +103,7 @@ def test_operator_killed_mid_run_restarts_without_duplicate_jobs(
     operator.start()
     status = wait_complete(cluster, namespace, name)
     assert len(jobs_of(cluster, namespace, name)) == 1
+    assert [r["metadata"]["name"] for r in runs_of(cluster, namespace, name)] == [first_run(name)]
     assert (status["replicas"], status["passed"], status["errors"]) == (3, 3, 0), status
     # the restarted operator kept the run's upload Secret: still one, the one its pods read
     uploads = cluster.kubectl(
@@ -113,6 +121,7 @@ def test_operator_down_while_a_test_is_created_starts_it_once(
     operator.start()
     status = wait_complete(cluster, namespace, name)
     assert len(jobs_of(cluster, namespace, name)) == 1
+    assert [r["metadata"]["name"] for r in runs_of(cluster, namespace, name)] == [first_run(name)]
     assert status["passed"] == 2
 
 
@@ -165,3 +174,53 @@ def test_minio_unreachable_for_30s_while_replicas_upload_loses_nothing(
     for i in range(3):
         for artifact in ("flight.ulg", "trajectory.csv", "result.json"):
             assert f"{namespace}/{name}/{run}/replica-{i}/{artifact}" in keys
+
+
+def test_a_schedule_of_every_minute_across_an_operator_restart_skips_and_duplicates_nothing(
+    cluster: Cluster, namespace: str, operator: Operator
+) -> None:
+    name = "every-minute"
+    doc = hover(name, namespace, replicas=1, parallelism=1, hold=1)
+    doc["spec"].update(schedule="* * * * *", successfulRunsHistoryLimit=1, failedRunsHistoryLimit=1)
+    cluster.apply(doc)
+    wait_complete(cluster, namespace, name)  # the run of the test's creation
+
+    def scheduled() -> list[str]:
+        runs = runs_of(cluster, namespace, name)
+        return sorted(r["spec"]["scheduledTime"] for r in runs if r["spec"]["trigger"] == "schedule")
+
+    assert cluster.wait_until(lambda: scheduled() != [], 180, interval=2.0)
+    operator.kill()  # in the middle of a scheduled run
+    operator.start()
+    # two more minutes come due after the restart
+    test = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)
+    since = test["status"]["lastScheduleTime"]
+    assert cluster.wait_until(
+        lambda: (
+            cluster.kubectl_json("get", "uavtest", name, "-n", namespace)["status"].get(
+                "lastScheduleTime", ""
+            )
+            >= _plus_minutes(since, 2)
+        ),
+        300,
+        interval=2.0,
+    )
+    # every run the operator created, from its Events on the test: one per minute, none twice, no gap
+    events = cluster.kubectl_json(
+        "get", "events", "-n", namespace, "--field-selector", f"involvedObject.name={name},reason=RunCreated"
+    )["items"]
+    created = sorted({e["message"].split()[1] for e in events if "(schedule)" in e["message"]})
+    minutes = sorted(int(n.rsplit("-s", 1)[1]) for n in created)
+    assert len(minutes) >= 3 and minutes == list(range(minutes[0], minutes[0] + len(minutes))), created
+    assert all(e.get("count", 1) == 1 for e in events), events  # no run was created twice
+    # history: at most one finished passing run kept, beside those still flying
+    runs = runs_of(cluster, namespace, name)
+    finished = [r for r in runs if r.get("status", {}).get("phase") in ("Succeeded", "Failed", "Error")]
+    assert len(finished) <= 2, [r["metadata"]["name"] for r in runs]  # 1 kept + 1 not trimmed yet
+
+
+def _plus_minutes(stamp: str, n: int) -> str:
+    from datetime import datetime, timedelta
+
+    when = datetime.fromisoformat(stamp.replace("Z", "+00:00")) + timedelta(minutes=n)
+    return when.isoformat().replace("+00:00", "Z")

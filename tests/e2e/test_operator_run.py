@@ -20,10 +20,13 @@ import yaml
 from e2e.operator_support import (
     Operator,
     assert_no_root_credentials,
+    first_run,
     fresh_bucket,
     running_operator,
     store_keys,
     wait_complete,
+    wait_exists,
+    wait_status,
 )
 from harness.cluster import REPO_ROOT, Cluster, KubectlError
 from harness.minio import MinioServer
@@ -115,47 +118,69 @@ def test_example_flies_in_parallel_pods_and_reports(
     # the replicas wrote with the run's upload policy only: no copy of the store's keys in the namespace
     secrets = assert_no_root_credentials(cluster, namespace, minio)
     upload = next(s for s in secrets if s["metadata"]["name"] == f"{jobs[0]['metadata']['name']}-upload")
-    assert [r["kind"] for r in upload["metadata"]["ownerReferences"]] == ["UavTest"]
+    assert [r["kind"] for r in upload["metadata"]["ownerReferences"]] == ["UavTestRun"]
+    # the run is owned by its test, the Job by the run
+    run_obj = cluster.kubectl_json("get", "uavtestrun", first_run(name), "-n", namespace)
+    assert [r["kind"] for r in run_obj["metadata"]["ownerReferences"]] == ["UavTest"]
+    assert [r["kind"] for r in jobs[0]["metadata"]["ownerReferences"]] == ["UavTestRun"]
     policy = json.loads(base64.b64decode(upload["data"]["policy"]))
     assert policy["bucket"] == bucket and policy["key_prefix"] == f"{namespace}/{name}/{run}/"
     runner = jobs[0]["spec"]["template"]["spec"]["containers"][0]
     assert {e["name"] for e in runner["env"]} & {"UAVTEST_S3_ACCESS_KEY", "UAVTEST_S3_SECRET_KEY"} == set()
     # Events and metrics
     events = cluster.kubectl(
-        "get", "events", "-n", namespace, "--field-selector", f"involvedObject.name={name}"
+        "get", "events", "-n", namespace, "--field-selector", f"involvedObject.name={first_run(name)}"
     )
     assert "TestPassed" in events
-    labels = {"namespace": namespace, "test": name}
-    assert operator.metric("uavtest_replicas_total", verdict="pass", **labels) == 3
-    assert operator.metric("uavtest_test_flakiness", **labels) == 0
-    assert (operator.metric("uavtest_runs_total", namespace=namespace, result="succeeded") or 0) >= 1
-    assert (operator.metric("uavtest_min_obstacle_distance_meters_count", namespace=namespace) or 0) >= 3
+    # metrics keyed by the test (not the run), namespace as test_namespace; the test's summary
+    # follows its run's final status
+    wait_status(cluster, namespace, name, "{.status.lastRun.phase}", "Succeeded", 120, kind="uavtest")
+    labels = {"test_namespace": namespace, "test": name}
+    assert operator.metric("uavtest_test_last_run_replicas", verdict="pass", **labels) == 3
+    assert operator.metric("uavtest_test_last_run_flakiness", **labels) == 0
+    assert operator.metric("uavtest_test_runs_total", result="succeeded", **labels) == 1
+    assert (operator.metric("uavtest_min_obstacle_distance_meters_count", test_namespace=namespace) or 0) >= 3
 
 
 def test_kubectl_get_shows_the_columns(
     cluster: Cluster, namespace: str, obstacle_pass: tuple[str, dict[str, Any]]
 ) -> None:
     name, _ = obstacle_pass
-    out = cluster.kubectl("get", "uavt", name, "-n", namespace).splitlines()
+    wait_status(cluster, namespace, name, "{.status.lastRun.phase}", "Succeeded", 120, kind="uavtest")
+    out = cluster.kubectl("get", "uavtr", first_run(name), "-n", namespace).splitlines()
     header = out[0].split()
-    assert header[:5] == ["NAME", "PHASE", "REPLICAS", "PASSED", "FAILED"]
+    assert header[:6] == ["NAME", "TEST", "PHASE", "REPLICAS", "PASSED", "FAILED"]
     assert "FLAKINESS" in header
     row = dict(zip(header, out[1].split(), strict=False))
-    assert (row["PHASE"], row["REPLICAS"], row["PASSED"], row["FAILED"], row["FLAKINESS"]) == (
+    assert (row["TEST"], row["PHASE"], row["REPLICAS"], row["PASSED"], row["FAILED"], row["FLAKINESS"]) == (
+        name,
         "Succeeded",
         "3",
         "3",
         "0",
         "0",
     )
+    out = cluster.kubectl("get", "uavt", name, "-n", namespace).splitlines()
+    header = out[0].split()
+    assert header[:4] == ["NAME", "PHASE", "LAST-RUN", "FLAKINESS"]
+    row = dict(zip(header, out[1].split(), strict=False))
+    assert (row["PHASE"], row["LAST-RUN"], row["FLAKINESS"]) == ("Succeeded", first_run(name), "0")
+    assert "RUNS" in header and "FLAKY-RATE" in header
 
 
 def test_a_failing_test_ends_failed(cluster: Cluster, namespace: str, operator: Operator) -> None:
     name = apply_example(cluster, namespace, "collision.yaml")
+    wait_exists(cluster, namespace, f"uavtestrun/{first_run(name)}")
     cluster.kubectl(
-        "wait", "-n", namespace, f"uavtest/{name}", "--for=condition=Failed", "--timeout=900s", timeout=930
+        "wait",
+        "-n",
+        namespace,
+        f"uavtestrun/{first_run(name)}",
+        "--for=condition=Failed",
+        "--timeout=900s",
+        timeout=930,
     )
-    status = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)["status"]
+    status = cluster.kubectl_json("get", "uavtestrun", first_run(name), "-n", namespace)["status"]
     assert status["phase"] == "Failed"
     assert status["failed"] == 3 and status["flakiness"] == 1 and status["flaky"] is False
     assert all(r["verdict"] == "fail" and r["reason"] for r in status["results"])
@@ -176,27 +201,70 @@ def test_a_flaky_example_reports_flakiness_between_0_and_1(
     flaky = next(c for c in status["conditions"] if c["type"] == "Flaky")
     assert flaky["status"] == "True"
     events = cluster.kubectl(
-        "get", "events", "-n", namespace, "--field-selector", f"involvedObject.name={name}"
+        "get", "events", "-n", namespace, "--field-selector", f"involvedObject.name={first_run(name)}"
     )
     assert "FlakyTest" in events
 
 
-def test_spec_changes_are_rejected(
-    cluster: Cluster, namespace: str, obstacle_pass: tuple[str, dict[str, Any]]
+def test_a_changed_spec_and_a_rerun_start_new_runs_and_history_keeps_the_newest(
+    cluster: Cluster, namespace: str, operator: Operator
 ) -> None:
-    name, _ = obstacle_pass
-    with pytest.raises(KubectlError) as e:
-        cluster.kubectl(
-            "patch",
-            "uavtest",
-            name,
-            "-n",
-            namespace,
-            "--type=merge",
-            "-p",
-            '{"spec":{"replicas":5}}',
-        )
-    assert "spec is immutable" in e.value.stderr
+    """GitOps edits a test in place: the apply is accepted and starts a new run; the old run stays
+    until the history limit removes it; deleting the test removes its runs and Jobs."""
+    doc = yaml.safe_load((EXAMPLES / "hover.yaml").read_text())
+    name = "history"
+    doc["metadata"] = {"name": name, "namespace": namespace}
+    doc["spec"].update(replicas=1, successfulRunsHistoryLimit=2)
+    cluster.kubectl("apply", "-f", "-", input=json.dumps(doc))
+    first = wait_complete(cluster, namespace, name)
+    assert first["phase"] == "Succeeded", first
+    # edit in place (kubectl apply of a changed spec): accepted, a new run with the new spec
+    doc["spec"]["replicas"] = 2
+    cluster.kubectl("apply", "-f", "-", input=json.dumps(doc))
+    second = wait_complete(cluster, namespace, name, run=f"{name}-g2")
+    assert (second["replicas"], second["passed"]) == (2, 2), second
+    runs = cluster.kubectl_json("get", "uavtestruns", "-n", namespace, "-l", f"uavtest.io/test={name}")[
+        "items"
+    ]
+    assert sorted(r["metadata"]["name"] for r in runs) == [f"{name}-g1", f"{name}-g2"]
+    assert {r["spec"]["testSpec"]["replicas"] for r in runs} == {1, 2}  # each run keeps what it flew
+    # an explicit re-run: a new value of the annotation
+    cluster.kubectl("annotate", "uavtest", name, "-n", namespace, "uavtest.io/rerun=nightly-1")
+    wait_status(cluster, namespace, name, "{.status.lastRerun}", "nightly-1", 120, kind="uavtest")
+    runs = cluster.kubectl_json("get", "uavtestruns", "-n", namespace, "-l", f"uavtest.io/test={name}")[
+        "items"
+    ]
+    rerun = next(r["metadata"]["name"] for r in runs if r["spec"]["trigger"] == "rerun")
+    wait_complete(cluster, namespace, name, run=rerun)
+    # history: the 2 newest passing runs are kept, the oldest is deleted; the test summarises them
+    wait_status(cluster, namespace, name, "{.status.lastRun.name}", rerun, 120, kind="uavtest")
+    assert cluster.wait_until(
+        lambda: (
+            cluster.kubectl("get", "uavtestrun", f"{name}-g1", "-n", namespace, "--ignore-not-found") == ""
+        ),
+        120,
+        interval=1.0,
+    )
+    test = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)
+    wait_status(cluster, namespace, name, "{.status.runs}", "2", 120, kind="uavtest")
+    test = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)
+    st = test["status"]
+    assert st["observedGeneration"] == test["metadata"]["generation"] == 2
+    assert (st["succeeded"], st["failed"], st["flakyRuns"], st["flakyRate"]) == (2, 0, 0, 0)
+    conds = {c["type"]: c["status"] for c in st["conditions"]}
+    assert (conds["Ready"], conds["Reconciling"], conds["Stalled"]) == ("True", "False", "False")
+    labels = {"test_namespace": namespace, "test": name}
+    assert operator.metric("uavtest_test_runs_total", result="succeeded", **labels) == 3
+    assert operator.metric("uavtest_test_flaky_rate", **labels) == 0
+    # deleting the test removes its runs and their Jobs (the artifacts in the store stay)
+    cluster.kubectl("delete", "uavtest", name, "-n", namespace, "--timeout=120s", timeout=150)
+    selector = f"uavtest.io/test={name}"
+
+    def gone() -> bool:
+        left = cluster.kubectl("get", "uavtestruns,jobs", "-n", namespace, "-l", selector, "-o", "name")
+        return left == ""
+
+    assert cluster.wait_until(gone, 180, interval=2.0)
 
 
 def test_an_invalid_test_is_rejected_at_admission_naming_the_field(cluster: Cluster, namespace: str) -> None:
