@@ -29,6 +29,7 @@ from e2e.operator_support import (
     wait_status,
 )
 from harness.cluster import REPO_ROOT, Cluster, KubectlError
+from harness.kstatus import KstatusUnavailable, kstatus
 from harness.minio import MinioServer
 
 pytestmark = [pytest.mark.e2e, pytest.mark.slow]
@@ -168,6 +169,23 @@ def test_kubectl_get_shows_the_columns(
     assert "RUNS" in header and "FLAKY-RATE" in header
 
 
+def kstatus_of(cluster: Cluster, namespace: str, obj: str) -> str:
+    """kstatus (the library Flux uses, built from Go modules) of a real object read back from the cluster."""
+    try:
+        return kstatus(cluster.kubectl_json("get", obj, "-n", namespace))[0]
+    except KstatusUnavailable as e:
+        pytest.skip(str(e))
+
+
+def test_gitops_health_a_passing_test_and_its_run_read_current(
+    cluster: Cluster, namespace: str, obstacle_pass: tuple[str, dict[str, Any]]
+) -> None:
+    name, _ = obstacle_pass
+    wait_status(cluster, namespace, name, "{.status.lastRun.phase}", "Succeeded", 120, kind="uavtest")
+    assert kstatus_of(cluster, namespace, f"uavtestrun/{first_run(name)}") == "Current"
+    assert kstatus_of(cluster, namespace, f"uavtest/{name}") == "Current"
+
+
 def test_a_failing_test_ends_failed(cluster: Cluster, namespace: str, operator: Operator) -> None:
     name = apply_example(cluster, namespace, "collision.yaml")
     wait_exists(cluster, namespace, f"uavtestrun/{first_run(name)}")
@@ -184,6 +202,10 @@ def test_a_failing_test_ends_failed(cluster: Cluster, namespace: str, operator: 
     assert status["phase"] == "Failed"
     assert status["failed"] == 3 and status["flakiness"] == 1 and status["flaky"] is False
     assert all(r["verdict"] == "fail" and r["reason"] for r in status["results"])
+    # GitOps health (kstatus, as Flux reads it): the run and the test read Failed
+    assert kstatus_of(cluster, namespace, f"uavtestrun/{first_run(name)}") == "Failed"
+    wait_status(cluster, namespace, name, "{.status.lastRun.phase}", "Failed", 120, kind="uavtest")
+    assert kstatus_of(cluster, namespace, f"uavtest/{name}") == "Failed"
     # a fail verdict is a result, not an accident: never retried
     job = cluster.kubectl_json("get", "jobs", "-n", namespace, "-l", f"uavtest.io/test={name}")["items"][0]
     pods = cluster.kubectl_json("get", "pods", "-n", namespace, "-l", f"uavtest.io/test={name}")["items"]
