@@ -243,6 +243,7 @@ def test_a_changed_spec_and_a_rerun_start_new_runs_and_history_keeps_the_newest(
     # edit in place (kubectl apply of a changed spec): accepted, a new run with the new spec
     doc["spec"]["replicas"] = 2
     cluster.kubectl("apply", "-f", "-", input=json.dumps(doc))
+    assert kstatus_of(cluster, namespace, f"uavtest/{name}") == "InProgress"  # until its new run passes
     second = wait_complete(cluster, namespace, name, run=f"{name}-g2")
     assert (second["replicas"], second["passed"]) == (2, 2), second
     runs = cluster.kubectl_json("get", "uavtestruns", "-n", namespace, "-l", f"uavtest.io/test={name}")[
@@ -251,7 +252,7 @@ def test_a_changed_spec_and_a_rerun_start_new_runs_and_history_keeps_the_newest(
     assert sorted(r["metadata"]["name"] for r in runs) == [f"{name}-g1", f"{name}-g2"]
     assert {r["spec"]["testSpec"]["replicas"] for r in runs} == {1, 2}  # each run keeps what it flew
     # an explicit re-run: a new value of the annotation
-    cluster.kubectl("annotate", "uavtest", name, "-n", namespace, "uavtest.io/rerun=nightly-1")
+    cluster.kubectl("annotate", "-n", namespace, f"uavtest/{name}", "uavtest.io/rerun=nightly-1")
     wait_status(cluster, namespace, name, "{.status.lastRerun}", "nightly-1", 120, kind="uavtest")
     runs = cluster.kubectl_json("get", "uavtestruns", "-n", namespace, "-l", f"uavtest.io/test={name}")[
         "items"
