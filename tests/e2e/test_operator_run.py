@@ -234,7 +234,7 @@ def test_a_changed_spec_and_a_rerun_start_new_runs_and_history_keeps_the_newest(
     """GitOps edits a test in place: the apply is accepted and starts a new run; the old run stays
     until the history limit removes it; deleting the test removes its runs and Jobs."""
     doc = yaml.safe_load((EXAMPLES / "hover.yaml").read_text())
-    name = "history"
+    name = "edited-in-place"  # (not "history": kubectl reads that as a word of its own)
     doc["metadata"] = {"name": name, "namespace": namespace}
     doc["spec"].update(replicas=1, successfulRunsHistoryLimit=2)
     cluster.kubectl("apply", "-f", "-", input=json.dumps(doc))

@@ -269,3 +269,14 @@ def test_results_are_bounded_failures_first() -> None:
     with pytest.raises(ValidationError):
         UavTestStatus(results=replicas)
     assert len(ReplicaStatus(index=0, seed=0, verdict="error", reason="x" * 1000).reason) == MAX_REASON_LENGTH
+
+
+def test_no_category_shadows_a_resource_name() -> None:
+    """kubectl expands a category before it reads a word as a resource: a category named like a
+    resource would make `kubectl get uavtest NAME` ask for every kind in it."""
+    words = set()
+    for doc in (crd(), run_crd()):
+        n = doc["spec"]["names"]
+        words |= {n["plural"], n["singular"], *n["shortNames"]}
+    for doc in (crd(), run_crd()):
+        assert not set(doc["spec"]["names"]["categories"]) & words
