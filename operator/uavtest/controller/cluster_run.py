@@ -211,7 +211,7 @@ def _follow(
                     names.RUN_PLURAL,
                     field_selector=f"metadata.name={name}",
                     resource_version=resource_version,
-                    timeout_seconds=max(1, min(_WATCH_SECONDS, math.ceil(left))),
+                    timeout_seconds=max(1, math.ceil(min(left, _WATCH_SECONDS))),  # left may be inf
                 ):
                     obj = event["object"]
                     if event["type"] == "DELETED":
