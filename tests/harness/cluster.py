@@ -67,6 +67,9 @@ PORT_NAMES = (
     "KUBELET_PORT",
     "KUBELET_HEALTHZ_PORT",
     "KWOK_PORT",
+    "KUBE_PROXY_PORT",
+    "KUBE_PROXY_METRICS_PORT",
+    "DNS_READY_PORT",
 )
 # flags that would point kubectl at another cluster than the harness's own
 FOREIGN_FLAGS = ("--kubeconfig", "--context", "--cluster", "--server", "-s", "--user", "--token")
@@ -361,7 +364,8 @@ def start_cluster(
         _LIVE.add(cluster)
     env = {k: str(v) for k, v in ports.items()}
     try:
-        _run_script("up.sh", str(d), *(["--kwok"] if kwok else []), env=env, timeout=UP_TIMEOUT)
+        opts = [*(["--kwok"] if kwok else []), *(["--pods"] if real_node else [])]
+        _run_script("up.sh", str(d), *opts, env=env, timeout=UP_TIMEOUT)
         if real_node:
             _run_script("up-real.sh", str(d), env=env, timeout=REAL_NODE_TIMEOUT)
         cluster.assert_own()
