@@ -129,15 +129,20 @@ def jobs_of(cluster: Cluster, namespace: str, test: str) -> list[dict[str, Any]]
     )
 
 
-def wait_reconciled(cluster: Cluster, namespace: str, name: str, timeout: float = 120) -> dict[str, Any]:
-    """Wait until the operator made the UavTest's Job and wrote a status phase; return the status."""
+def wait_reconciled(release: Release, namespace: str, name: str, timeout: float = 120) -> dict[str, Any]:
+    """Wait until RELEASE's operator made the UavTest's Job and wrote a status phase; return the status."""
+    cluster = release.cluster
 
     def done() -> bool:
         obj = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)
         return bool(obj.get("status", {}).get("phase")) and bool(jobs_of(cluster, namespace, name))
 
     if not cluster.wait_until(done, timeout, interval=1):
-        raise ClusterError(f"UavTest {namespace}/{name} not reconciled after {timeout}s")
+        events = cluster.kubectl("get", "events", "-n", namespace, check=False)
+        raise ClusterError(
+            f"UavTest {namespace}/{name} not reconciled after {timeout}s\n{events}\n"
+            f"--- operator log\n{release.log()[-3000:]}"
+        )
     return dict(cluster.kubectl_json("get", "uavtest", name, "-n", namespace)["status"])
 
 

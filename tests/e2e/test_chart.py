@@ -146,7 +146,7 @@ class TestClusterWide:
     ) -> None:
         other = namespaces[1]
         name = apply_uavtest(cluster, other, "elsewhere", replicas=1)
-        status = wait_reconciled(cluster, other, name)
+        status = wait_reconciled(release, other, name)
         assert status["replicas"] == 1
         (job,) = jobs_of(cluster, other, name)
         assert job["spec"]["completions"] == 1
@@ -166,15 +166,21 @@ class TestWatchNamespaces:
     @pytest.fixture(scope="class")
     @classmethod
     def release(
-        cls, cluster: Cluster, namespaces: tuple[str, str, str], operator_image: str, runner_image: str
+        cls,
+        cluster: Cluster,
+        namespaces: tuple[str, str, str],
+        operator_image: str,
+        runner_image: str,
+        minio_image: str,
     ) -> Iterator[Release]:
         ns, watched, unwatched = namespaces
         values = [
             *dev_image_values(operator_image, runner_image),
             f"operator.watchNamespaces={{{watched}}}",
+            "minio.enabled=true",  # a store the operator can sign each run's upload policy for
+            f"minio.image={minio_image}",
+            f"minio.rootPassword={MINIO_PASSWORD}",
             "store.createSecret=true",
-            "store.accessKey=unused",
-            f"store.secretKey={secrets.token_hex(8)}",
         ]
         with installed(cluster, f"watch-{secrets.token_hex(3)}", ns, *values) as rel:
             try:
@@ -196,7 +202,7 @@ class TestWatchNamespaces:
         # had every chance to see it
         apply_uavtest(cluster, unwatched, "ignored", replicas=1)
         apply_uavtest(cluster, watched, "watched", replicas=1)
-        wait_reconciled(cluster, watched, "watched")
+        wait_reconciled(release, watched, "watched")
         assert jobs_of(cluster, unwatched, "ignored") == []
         ignored = cluster.kubectl_json("get", "uavtest", "ignored", "-n", unwatched)
         assert "status" not in ignored or not ignored["status"].get("phase"), ignored.get("status")
