@@ -91,7 +91,11 @@ class TestClusterWide:
         (state,) = pod["status"]["containerStatuses"]
         assert state["ready"] is True and state["restartCount"] == 0, state
         # in-cluster config: the ServiceAccount token, the apiserver through kubernetes.default (kube-proxy)
-        assert "Initial authentication has finished" in release.log()
+        log = release.log()
+        assert "Initial authentication has finished" in log
+        # the kubelet's probes reached kopf's health endpoint on the pod's IP and got 200
+        probed = [line for line in log.splitlines() if "kube-probe/" in line]
+        assert any('"GET /healthz HTTP/1.1" 200' in line for line in probed), log[-2000:]
         uid = cluster.kubectl("exec", pod["metadata"]["name"], "-n", release.namespace, "--", "id", "-u")
         assert uid.strip() == "65532"
         # cluster-wide RBAC: a ClusterRole and its binding, valid in any namespace
