@@ -9,7 +9,8 @@
     c.stop()                              # down-real.sh: nothing left on the host
 
 Only one real-node cluster can run on a host at a time; kwok clusters (control plane + fake node, pods
-never run) can run beside it. Every port is on 127.0.0.1 and picked free at start.
+never run) can run beside it. Every port is on 127.0.0.1 and picked free at start (a real-node cluster's
+apiserver listens on all addresses and CoreDNS on the pod bridge's: pods reach them there).
 """
 
 from __future__ import annotations
