@@ -42,6 +42,7 @@ __all__ = [
     "run_in_cluster",
     "still_running_message",
     "summary_from_status",
+    "watch_seconds",
     "with_download",
 ]
 
@@ -49,6 +50,11 @@ MAX_REPLICAS = 1000  # spec.replicas' bound
 MAX_SEED = 2**32 - 1  # spec.seed's bound
 
 _WATCH_SECONDS = 60
+
+
+def watch_seconds(left: float) -> int:
+    """Seconds for one watch request: at most a minute, at least 1, ``left`` may be infinite."""
+    return max(1, math.ceil(min(float(_WATCH_SECONDS), left)))
 
 
 def exit_code_for(status: Mapping[str, Any]) -> ExitCode:
@@ -184,7 +190,7 @@ def _follow(
                     names.PLURAL,
                     field_selector=f"metadata.name={name}",
                     resource_version=resource_version,
-                    timeout_seconds=max(1, min(_WATCH_SECONDS, math.ceil(left))),
+                    timeout_seconds=watch_seconds(left),
                 ):
                     obj = event["object"]
                     if event["type"] == "DELETED":
