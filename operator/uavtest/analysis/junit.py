@@ -45,7 +45,9 @@ def seeds_text(seeds: Sequence[int]) -> str:
     if not seeds:
         return "-"
     ordered = sorted(seeds)
-    if len(ordered) > 1 and ordered == list(range(ordered[0], ordered[-1] + 1)):
+    if len(ordered) == 1:
+        return str(ordered[0])
+    if ordered == list(range(ordered[0], ordered[-1] + 1)):
         return f"{ordered[0]}..{ordered[-1]}"
     return ",".join(str(s) for s in ordered)
 

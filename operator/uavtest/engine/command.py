@@ -114,6 +114,6 @@ def run_command(
     elif several:
         stdout.print(suite_table(outcomes))
     code = combined_exit(o.code for o in outcomes)
-    if several:
+    if several and not json_out:
         stdout.print(f"exit {int(code)}: {exit_meaning(code)}", highlight=False)
     return int(code)
