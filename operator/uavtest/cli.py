@@ -149,9 +149,11 @@ def run(
     warning = ignored_warning(engine, ignored_options(engine, given, wait=waits), wait=waits)
     if warning:
         err.print(f"[yellow]warning:[/] {warning}", highlight=False, soft_wrap=True)
-    from uavtest.run_many import expand_tests
+    from uavtest.run_many import check_junit_path, expand_tests
 
     files = expand_tests(tests)
+    if junit is not None:
+        check_junit_path(junit)
     if engine is Engine.KUBERNETES:
         from uavtest.controller.cluster_run import ClusterRunOptions, run_in_cluster
 

@@ -34,6 +34,7 @@ from uavtest.errors import BadInput, ExitCode, InfrastructureError, MissingFile
 __all__ = [
     "TEST_SUFFIXES",
     "TestOutcome",
+    "check_junit_path",
     "combined_exit",
     "exit_meaning",
     "expand_tests",
@@ -161,6 +162,18 @@ def exit_meaning(code: ExitCode) -> str:
         ExitCode.BAD_INPUT: "bad input",
         ExitCode.INFRASTRUCTURE: "bench errors, no failure",
     }[code]
+
+
+def check_junit_path(path: Path) -> None:
+    """Refuse a ``--junit`` path that cannot be written before anything flies (exit 2)."""
+    if path.is_dir():
+        raise BadInput(
+            "is a folder", field="--junit", value=str(path), allowed="a file path, e.g. report.xml"
+        )
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise BadInput(f"its folder cannot be made: {e}", field="--junit", value=str(path)) from None
 
 
 def write_junit(path: Path, xml: bytes, console: Console) -> None:

@@ -8,19 +8,21 @@ one table over the tests and one exit code (``uavtest.run_many``).
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 
 from uavtest.errors import BadInput, UavTestError
 
+if TYPE_CHECKING:
+    from uavtest.engine.local import LocalRun
+
 __all__ = ["run_command"]
 
 
-def _print_run(stdout: Console, run: object) -> None:
-    from uavtest.engine.local import LocalRun
+def _print_run(stdout: Console, run: LocalRun) -> None:
     from uavtest.engine.outcome import results_table, summary_line, unmodelled_line
 
-    assert isinstance(run, LocalRun)
     summary = run.summary
     stdout.print(results_table(summary))
     stdout.print(summary_line(summary), highlight=False)
@@ -95,7 +97,9 @@ def run_command(
         try:
             run = run_local(options, console=err)
         except UavTestError as e:
-            if not several and junit is None:
+            # one test: as always, the error and its exit code (with --junit, a bench error is
+            # reported first); several: said, recorded, and the next test flies
+            if not several and (junit is None or isinstance(e, BadInput)):
                 raise
             err.print(f"[bold red]error:[/] {test}: {e}", highlight=False, soft_wrap=True)
             outcomes.append(

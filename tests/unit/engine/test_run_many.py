@@ -11,7 +11,15 @@ import pytest
 from uavtest.analysis.flakiness import summarize
 from uavtest.analysis.models import ReplicaResult, Verdict
 from uavtest.errors import BadInput, ExitCode, MissingFile
-from uavtest.run_many import TestOutcome, combined_exit, expand_tests, json_report, junit_report, suite_table
+from uavtest.run_many import (
+    TestOutcome,
+    check_junit_path,
+    combined_exit,
+    expand_tests,
+    json_report,
+    junit_report,
+    suite_table,
+)
 
 P, F, B, E = ExitCode.PASS, ExitCode.FAIL, ExitCode.BAD_INPUT, ExitCode.INFRASTRUCTURE
 
@@ -89,3 +97,13 @@ def test_the_table_has_a_row_per_test() -> None:
     table = suite_table(outcomes)
     assert table.row_count == 2
     assert [c.header for c in table.columns][:3] == ["file", "test", "verdict"]
+
+
+def test_a_junit_path_that_cannot_be_written_is_refused_before_flying(tmp_path: Path) -> None:
+    with pytest.raises(BadInput, match="is a folder"):
+        check_junit_path(tmp_path)
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(BadInput, match="--junit"):
+        check_junit_path(tmp_path / "file" / "report.xml")
+    check_junit_path(tmp_path / "new" / "report.xml")
+    assert (tmp_path / "new").is_dir()
