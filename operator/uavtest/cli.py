@@ -76,6 +76,7 @@ def run(
         list[Path],
         typer.Argument(
             help="test files (UavTest, Aerialist or competition YAML) or folders of them (*.yaml, *.yml)",
+            metavar="TEST",
             show_default=False,
         ),
     ],

@@ -7,7 +7,11 @@ test the API server rejects), 3 bench errors only, or the cluster could not be u
 
 ``--replicas`` / ``--seed`` override the spec before it is created; ``--json`` prints the local
 engine's ``RunSummary``; ``--out`` downloads the run's artifacts (``cluster_download``);
-``--timeout`` gives up waiting (exit 3) and leaves the UavTest running.
+``--timeout`` gives up waiting (exit 3) and leaves the UavTest running; ``--junit`` writes the runs
+as JUnit XML (from the store's ``summary.json`` when ``--out`` brought it home, else from the status,
+with each replica's ``s3://`` artifact URIs). Several tests are all rendered and dry-run created
+first (a wrong one: exit 2, nothing created), then created and followed together; one exit code
+(``uavtest.run_many``).
 """
 
 from __future__ import annotations
