@@ -229,3 +229,15 @@ def test_a_run_without_timeout_watches_a_minute_at_a_time() -> None:
     assert watch_seconds(math.inf) == 60
     assert watch_seconds(0.2) == 1
     assert watch_seconds(12.5) == 13
+
+
+def test_junit_links_are_the_replicas_s3_uris_from_the_status() -> None:
+    from uavtest.controller.cluster_run import replica_links
+
+    status = {"runId": "r1", "artifacts": {"store": "s3://uavtest/pre/ns/t-x7k2f/r1/"}}
+    links = replica_links(status, "t-x7k2f", "ns", [0, 2])
+    assert links[2] == {
+        "flight.ulg": "s3://uavtest/pre/ns/t-x7k2f/r1/replica-2/flight.ulg",
+        "result.json": "s3://uavtest/pre/ns/t-x7k2f/r1/replica-2/result.json",
+    }
+    assert replica_links({"runId": "r1"}, "t", "ns", [0]) == {}
