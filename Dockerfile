@@ -1,6 +1,8 @@
 # The uavtest operator image: `uavtest operator` (kopf) with the package and its dependencies.
 #   docker build -t uavtest-operator:0.1.0 .
 # The Helm chart runs it as uid 65532 with a read-only root filesystem (HOME and MPLCONFIGDIR in /tmp).
+# The e2e suite builds the same image without Docker (tests/cluster/build-runner-image.sh writes
+# uavtest-operator:dev: the runner image's layers with this entrypoint, command, user and ports).
 FROM python:3.11-slim-bookworm AS build
 WORKDIR /src
 COPY pyproject.toml README.md* ./

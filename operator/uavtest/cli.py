@@ -72,7 +72,14 @@ def report(
 
 @app.command()
 def run(
-    test: Annotated[Path, typer.Argument(help="UavTest YAML, Aerialist or competition test YAML")],
+    tests: Annotated[
+        list[Path],
+        typer.Argument(
+            help="test files (UavTest, Aerialist or competition YAML) or folders of them (*.yaml, *.yml)",
+            metavar="TEST",
+            show_default=False,
+        ),
+    ],
     replicas: Annotated[int | None, typer.Option(help="how many replicas (overrides spec.replicas)")] = None,
     jobs: Annotated[
         int | None, typer.Option(help="local: replicas at once (default: number of cores)")
@@ -99,9 +106,16 @@ def run(
         float | None,
         typer.Option(help="kubernetes: seconds to wait for the final status; then exit 3, the test runs on"),
     ] = None,
-    json_out: Annotated[bool, typer.Option("--json", help="print the RunSummary as JSON")] = False,
+    json_out: Annotated[
+        bool,
+        typer.Option("--json", help="print the RunSummary as JSON (several tests: a list of them)"),
+    ] = False,
+    junit: Annotated[
+        Path | None,
+        typer.Option(help="write a JUnit XML report here: a suite per test, a case per replica"),
+    ] = None,
 ) -> None:
-    """Fly a test's replicas in simulation and report verdicts, flakiness and the averaged trajectory.
+    """Fly tests' replicas in simulation and report verdicts, flakiness and the averaged trajectory.
 
     Exit codes: 0 every replica passed; 1 any replica failed; 2 bad input; 3 bench errors and no
     failure — also when some replicas passed and others errored, since the run cannot vouch for
@@ -115,6 +129,12 @@ def run(
     settings (checked before anything is created: exit 2 without them). A download that fails
     after the run makes a passing run exit 3; a failing run still exits 1. --timeout running out
     exits 3 and leaves the UavTest running.
+
+    Several tests (files, or a folder's *.yaml / *.yml): all are checked first (a wrong one: exit 2,
+    nothing flies), then flown one after the other (kubernetes: all created, then followed
+    together); one table, one exit code: 1 if any test failed, else 2 if any was bad input, else 3
+    if any had bench errors, else 0. --junit FILE writes JUnit XML, one suite per test and a case
+    per replica (also aggregate/junit.xml in the store); --json prints a list then.
     """
     given = {
         "--jobs": jobs,
@@ -124,16 +144,22 @@ def run(
         "--timeout": timeout,
         "--out": out,
         "--json": json_out or None,
+        "--junit": junit,
     }
     waits = wait is not False
     warning = ignored_warning(engine, ignored_options(engine, given, wait=waits), wait=waits)
     if warning:
         err.print(f"[yellow]warning:[/] {warning}", highlight=False, soft_wrap=True)
+    from uavtest.run_many import check_junit_path, expand_tests
+
+    files = expand_tests(tests)
+    if junit is not None:
+        check_junit_path(junit)
     if engine is Engine.KUBERNETES:
         from uavtest.controller.cluster_run import ClusterRunOptions, run_in_cluster
 
         options = ClusterRunOptions(
-            test,
+            files,
             namespace=namespace,
             wait=waits,
             replicas=replicas,
@@ -141,19 +167,21 @@ def run(
             out=out if waits else None,
             json_out=json_out and waits,
             timeout=timeout if waits else None,
+            junit=junit if waits else None,
         )
         raise typer.Exit(run_in_cluster(options))
     from uavtest.engine import run_command
 
     raise typer.Exit(
         run_command(
-            test,
+            files,
             replicas=replicas,
             jobs=jobs,
             out=out if out is not None else Path("runs"),
             seed=seed,
             replica=replica,
             json_out=json_out,
+            junit=junit,
         )
     )
 

@@ -26,7 +26,7 @@ LOCAL_ONLY = ("--jobs", "--replica")
 #: options only the kubernetes engine uses
 KUBERNETES_ONLY = ("--namespace", "--wait", "--timeout")
 #: options that mean nothing once ``--no-wait`` returned right after creating the UavTest
-NEEDS_WAIT = ("--out", "--json", "--timeout")
+NEEDS_WAIT = ("--out", "--json", "--junit", "--timeout")
 
 
 def ignored_options(engine: Engine, given: Mapping[str, object], *, wait: bool = True) -> list[str]:

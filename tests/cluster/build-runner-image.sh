@@ -1,5 +1,7 @@
 #!/bin/bash
-# build-runner-image.sh REPO_ROOT [OUT.tar] : the runner OCI image "uavtest-runner:dev", without Docker.
+# build-runner-image.sh REPO_ROOT [OUT.tar] : the runner OCI image "uavtest-runner:dev", without Docker, and
+# beside OUT.tar the operator image "uavtest-operator:dev" (uavtest-operator-dev.tar: the same layers, the root
+# Dockerfile's config) and, when build.sh made MinIO, a MinIO image "uavtest.local/minio:dev" (minio.tar).
 #   layer 1  Debian bookworm rootfs: debootstrap --variant=minbase + python3, python3-venv
 #            (cached under $UAVTEST_CACHE/image, keyed by the package list)
 #   layer 2  a venv /opt/uavtest holding the project's dependencies (wheels for CPython 3.11 manylinux,
@@ -88,6 +90,9 @@ WHL=$(cd "$WORK/proj/dist" && ls uavtest-*.whl)
 mkdir -p "$M/tmp/dist"; cp "$WORK/proj/dist/$WHL" "$M/tmp/dist/"
 chroot_run "$M" "$VENV/bin/pip" install --quiet --no-cache-dir --no-index --no-deps "/tmp/dist/$WHL"
 rm -rf "$M/tmp/dist" "$M/root/.cache"
+# the non-root user both images run as (the Dockerfiles' `useradd --uid 65532 ... uavtest`)
+grep -q '^uavtest:' "$M/etc/passwd" || echo 'uavtest:x:65532:65532::/tmp:/usr/sbin/nologin' >> "$M/etc/passwd"
+grep -q '^uavtest:' "$M/etc/group" || echo 'uavtest:x:65532:' >> "$M/etc/group"
 chroot_run "$M" /usr/local/bin/uavtest --help >/dev/null 2>&1 || log "note: 'uavtest --help' fails in the image (CLI not written yet?)"
 overlay_umount "$M"
 python3 "$HERE/mkoci.py" layer "$WORK/proj/upper" "$WORK/proj/layer.tar" >/dev/null
@@ -108,5 +113,45 @@ else
   echo "$BASE_REF $B/base-image.tar" > "$OUT.base"
 fi
 log "image layer 3 (project wheel) + archive: built in $(since "$t0")s -> $OUT ($(du -h "$OUT" | cut -f1))"
+
+# ---------------------------------------------------------------- the operator image: the same layers
+# The root Dockerfile's image: entrypoint `uavtest`, command `operator --metrics-port=8080 --liveness-port=8081`,
+# uid 65532, HOME and MPLCONFIGDIR in /tmp (the chart mounts an emptyDir there: read-only root filesystem).
+t0=$(now)
+OP_OUT=$(dirname "$OUT")/uavtest-operator-dev.tar
+OP_CONFIG=("${IMAGE_CONFIG[@]}" --env PYTHONDONTWRITEBYTECODE=1 --env HOME=/tmp --env MPLCONFIGDIR=/tmp/matplotlib
+  --entrypoint '["uavtest"]' --cmd '["operator", "--metrics-port=8080", "--liveness-port=8081"]'
+  --user 65532:65532 --port 8080 --port 8081)
+if [ "$FULL" = 1 ]; then
+  python3 "$HERE/mkoci.py" image --out "$OP_OUT" --name "$OPERATOR_IMAGE_REF" "${OP_CONFIG[@]}" \
+    "$A/layer.tar" "$B/layer.tar" "$WORK/proj/layer.tar" >/dev/null
+  rm -f "$OP_OUT.base"
+else
+  python3 "$HERE/mkoci.py" image --thin 2 --out "$OP_OUT" --name "$OPERATOR_IMAGE_REF" "${OP_CONFIG[@]}" \
+    "$A/layer.tar" "$B/layer.tar" "$WORK/proj/layer.tar" >/dev/null
+  echo "$BASE_REF $B/base-image.tar" > "$OP_OUT.base"
+fi
+log "operator image archive: built in $(since "$t0")s -> $OP_OUT"
+
+# ---------------------------------------------------------------- a MinIO image (the chart's throwaway MinIO)
+# layer 1 (it has /bin/sh, which the chart's MinIO command uses) + the MinIO server build.sh made; thin, like
+# the others, it imports once the runner's base is in containerd (the base holds layer 1)
+if [ -x "$BIN/minio" ]; then
+  t0=$(now)
+  MN=$IMG/minio-$(key "$(cat "$BIN/.stamp-minio" 2>/dev/null)" "$(stat -c %Y "$BIN/minio")")
+  if [ ! -f "$MN/layer.tar" ]; then
+    rm -rf "$MN"; mkdir -p "$WORK/minio/root/usr/local/bin"
+    cp "$BIN/minio" "$WORK/minio/root/usr/local/bin/minio"
+    python3 "$HERE/mkoci.py" layer "$WORK/minio/root" "$WORK/minio/layer.tar" >/dev/null
+    rm -rf "$WORK/minio/root"; mv "$WORK/minio" "$MN"
+  fi
+  MN_OUT=$(dirname "$OUT")/minio.tar
+  if [ "$FULL" = 1 ]; then thin=(); else thin=(--thin 1); fi
+  python3 "$HERE/mkoci.py" image "${thin[@]}" --out "$MN_OUT" --name "$MINIO_IMAGE_REF" --user 65532:65532 \
+    --port 9000 --entrypoint '["minio"]' --cmd '["server", "/data"]' "$A/layer.tar" "$MN/layer.tar" >/dev/null
+  if [ "$FULL" = 1 ]; then rm -f "$MN_OUT.base"; else echo "$BASE_REF $B/base-image.tar" > "$MN_OUT.base"; fi
+  touch "$MN/.used"
+  log "minio image archive: built in $(since "$t0")s -> $MN_OUT"
+fi
 
 image_cache_hygiene "$A" "$B" "$BE"

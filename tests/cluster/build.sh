@@ -1,6 +1,6 @@
 #!/bin/bash
 # build.sh [STEP...] : build (once) everything the e2e cluster needs, into $UAVTEST_CACHE (~/.cache/uavtest).
-#   steps: k8s etcd kwok minio helm pause debs   (default: all of them, in that order)
+#   steps: k8s kube-proxy etcd kwok minio helm coredns pause debs iptables   (default: all, in that order)
 # Each step is skipped when its outputs exist and its version stamp matches; each prints its duration.
 # From nothing it needs only Go (>= 1.26), apt-get/dpkg-deb, and the Go module proxy + Debian mirror.
 set -euo pipefail
@@ -8,7 +8,7 @@ set -euo pipefail
 
 mkdir -p "$BIN" "$SHARE" "$CACHE/src" "$CACHE/deb"
 exec 9>"$CACHE/.build.lock"; flock 9   # concurrent test sessions share the cache: one build at a time
-STEPS=("$@"); [ ${#STEPS[@]} -gt 0 ] || STEPS=(k8s etcd kwok minio helm pause debs)
+STEPS=("$@"); [ ${#STEPS[@]} -gt 0 ] || STEPS=(k8s kube-proxy etcd kwok minio helm coredns pause debs iptables)
 
 # stamp_ok NAME KEY FILE... : true when every FILE exists and the stamp of NAME reads KEY
 stamp_ok() {
@@ -40,6 +40,19 @@ build_k8s() {
   ld="$ld -X k8s.io/component-base/version.gitTreeState=clean"
   (cd "$src" && go build -trimpath -ldflags="$ld" -o "$BIN/" tool)
   stamp_set k8s "$key"
+}
+
+# kube-proxy: a wrapper module of its own (go/kube-proxy, the same k8s.io/kubernetes version and replaces), so
+# adding it left the k8s step's stamp alone; shares the Go build cache, so it mostly links (~20 s warm)
+build_kube_proxy() {
+  local key; key="$K8S_VERSION $(filesum "$HERE/go/kube-proxy/go.mod" "$HERE/go/kube-proxy/go.sum")"
+  if stamp_ok kube-proxy "$key" "$BIN/kube-proxy"; then SKIPPED=1; return 0; fi
+  local src minor ld
+  src=$(wrapper kube-proxy); minor=$(echo "$K8S_VERSION" | cut -d. -f2)
+  ld="-s -w -X k8s.io/component-base/version.gitVersion=$K8S_VERSION -X k8s.io/component-base/version.gitMajor=1"
+  ld="$ld -X k8s.io/component-base/version.gitMinor=$minor -X k8s.io/component-base/version.gitTreeState=clean"
+  (cd "$src" && go build -trimpath -ldflags="$ld" -o "$BIN/" tool)
+  stamp_set kube-proxy "$key"
 }
 
 build_etcd() {
@@ -77,6 +90,13 @@ build_helm() {
   stamp_set helm "$HELM_VERSION"
 }
 
+# the cluster DNS: CoreDNS (kubernetes + forward plugins), run on the host by up-real.sh
+build_coredns() {
+  if stamp_ok coredns "$COREDNS_VERSION" "$BIN/coredns"; then SKIPPED=1; return 0; fi
+  GOBIN=$BIN go install -trimpath -ldflags='-s -w' "github.com/coredns/coredns@$COREDNS_VERSION"
+  stamp_set coredns "$COREDNS_VERSION"
+}
+
 build_pause() {
   local key; key=$(filesum "$HERE/go/pause/main.go" "$HERE/go/pause/go.mod" "$HERE/mkoci.py")
   if stamp_ok pause "$key" "$BIN/pause" "$SHARE/pause.tar"; then SKIPPED=1; return 0; fi
@@ -101,6 +121,23 @@ build_debs() {
   stamp_set debs "$key"
 }
 
+# iptables (nft backend) + conntrack for kube-proxy, unpacked into a directory of their own (not DEBX: a
+# running cluster uses DEBX, and sessions of other checkouts may re-unpack it); the Debian alternatives are
+# made by hand as symlinks in $IPTX/bin (iptables -> xtables-nft-multi, ...)
+build_iptables() {
+  local key="$IPT_PACKAGES"
+  if stamp_ok iptables "$key" "$IPTX/bin/iptables" "$IPTX/bin/conntrack"; then SKIPPED=1; return 0; fi
+  fetch_debs "$CACHE/deb/ipt-pkgs" $IPT_PACKAGES
+  rm -rf "$IPTX"; mkdir -p "$IPTX/bin"
+  for f in "$CACHE"/deb/ipt-pkgs/*.deb; do dpkg-deb -x "$f" "$IPTX"; done
+  local t v
+  for t in iptables ip6tables; do
+    for v in "" -save -restore; do ln -s ../usr/sbin/xtables-nft-multi "$IPTX/bin/$t$v"; done
+  done
+  ln -s ../usr/sbin/conntrack "$IPTX/bin/conntrack"
+  stamp_set iptables "$key"
+}
+
 # fetch_debs DIR PKG... : apt-get download PKGs into DIR (apt-get update once if the lists lack them)
 fetch_debs() {
   local dir=$1; shift
@@ -114,10 +151,10 @@ fetch_debs() {
 
 total0=$(now)
 for s in "${STEPS[@]}"; do
-  declare -F "build_$s" >/dev/null || { log "unknown step: $s"; exit 2; }
+  declare -F "build_${s//-/_}" >/dev/null || { log "unknown step: $s"; exit 2; }
   t0=$(now); SKIPPED=0
   trap 'log "build $s: FAILED after $(since "$t0")s"' ERR
-  "build_$s"   # not in an `||` context, so `set -e` stays in force inside the step
+  "build_${s//-/_}"   # not in an `||` context, so `set -e` stays in force inside the step
   trap - ERR
   if [ "$SKIPPED" = 1 ]; then log "build $s: up to date ($(since "$t0")s)"; else log "build $s: built in $(since "$t0")s"; fi
 done

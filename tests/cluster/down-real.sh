@@ -1,7 +1,8 @@
 #!/bin/bash
 # down-real.sh DIR [--purge] : stop the real node of up-real.sh DIR and then the control plane (down.sh), and
 # undo what kubelet/containerd did to the host: container processes and shims, mounts under DIR, network
-# namespaces, the CNI bridge, the k8s.io cgroups, the few hard-coded host paths, the sysctls kubelet tuned.
+# namespaces, the CNI bridge, the k8s.io cgroups, the few hard-coded host paths, the sysctls kubelet tuned,
+# kube-proxy's iptables rules (`kube-proxy --cleanup`), IPv4 forwarding.
 # Host-wide clean-up happens only if this cluster held the host's real node (see up-real.sh), so it never
 # touches another session's running node. Safe to run twice, or after a failed up-real.sh.
 set -uo pipefail   # no -e: clean up as much as possible, whatever fails
@@ -31,7 +32,7 @@ exec 8<&-
 # 1-2. a throwaway cluster: nothing to drain. Stop whatever makes or runs pods (kcm's Job controller, the
 #      scheduler, kubelet) at once, then kill every container through containerd (the netns, mounts and cgroups
 #      they leave are removed below)
-UAVTEST_STOP_GRACE=0 stop_pidfile "$D/kcm.pid" "$D/scheduler.pid" "$D/kubelet.pid"
+UAVTEST_STOP_GRACE=0 stop_pidfile "$D/kcm.pid" "$D/scheduler.pid" "$D/kubelet.pid" "$D/kube-proxy.pid" "$D/coredns.pid"
 # 3. kill the tasks, remove the containers, stop containerd
 if ctr_ok; then
   for t in $(timeout 5 "${CTR[@]}" tasks ls -q 2>/dev/null); do
@@ -77,6 +78,16 @@ if [ "$OWNED" = 1 ]; then
     [[ $live == *" $ino "* ]] && continue
     umount -l "$n" 2>/dev/null; rm -f "$n"
   done
+  # kube-proxy's chains and rules (iptables nft backend), the way kube-proxy itself removes them
+  if [ -x "$BIN/kube-proxy" ] && [ -x "$IPTX/bin/iptables" ]; then
+    env PATH="$IPTX/bin:$PATH" LD_LIBRARY_PATH="$IPTX/usr/lib/x86_64-linux-gnu" \
+      XTABLES_LIBDIR="$IPTX/usr/lib/x86_64-linux-gnu/xtables" bash -c '
+        timeout 30 "$1" --cleanup
+        # --cleanup leaves the (empty) filter chain KUBE-FIREWALL and its jumps behind
+        for c in INPUT OUTPUT; do while iptables -w 5 -D "$c" -j KUBE-FIREWALL 2>/dev/null; do :; done; done
+        iptables -w 5 -F KUBE-FIREWALL 2>/dev/null; iptables -w 5 -X KUBE-FIREWALL 2>/dev/null; true
+      ' _ "$BIN/kube-proxy" >>"$D/logs/kube-proxy.log" 2>&1
+  fi
   BR=$(sed -n 's/^BRIDGE=//p' "$D/host-state.txt" 2>/dev/null)
   [ -n "$BR" ] && ip link del "$BR" 2>/dev/null
   # 8. host paths kubelet / containerd 1.6 / libcni hard-code: remove what this run left, dirs only if empty

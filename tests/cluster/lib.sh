@@ -7,6 +7,7 @@ CACHE=${UAVTEST_CACHE:-$HOME/.cache/uavtest}
 BIN=$CACHE/bin          # built binaries (kube-*, kubectl, etcd, kwok, minio, pause)
 SHARE=$CACHE/share      # kwok stages, images (OCI archives)
 DEBX=$CACHE/deb/x       # Debian packages unpacked with dpkg-deb -x (containerd, runc, CNI, debootstrap)
+IPTX=$CACHE/deb/ipt     # iptables + conntrack unpacked the same way (kube-proxy); bin/ holds the command names
 
 # --- pinned versions (bump here; the version stamps then force a rebuild)
 K8S_VERSION=v1.36.3
@@ -16,10 +17,15 @@ KWOK_VERSION=v0.8.0
 MINIO_VERSION=v0.0.0-20260212201848-7aac2a2c5b7c
 HELM_VERSION=v3.16.4   # renders charts/uavtest in the chart tests
 DEB_PACKAGES="containerd runc containernetworking-plugins"
+COREDNS_VERSION=v1.14.7   # the cluster DNS (go install)
+# kube-proxy's iptables mode: iptables with its libraries the host may lack, and conntrack (Debian bookworm)
+IPT_PACKAGES="iptables libip4tc2 libip6tc2 libxtables12 libnftnl11 libmnl0 libnetfilter-conntrack3 libnfnetlink0 conntrack"
 REAL_NODE_OWNER=/run/uavtest-real-node   # "DIR PID" of the cluster that has the host's one real node
 PAUSE_IMAGE=uavtest.local/pause:1   # the pod sandbox image, built from go/pause
 RUNNER_IMAGE=uavtest-runner:dev   # what pod specs say (imagePullPolicy: Never)
 RUNNER_IMAGE_REF=docker.io/library/$RUNNER_IMAGE   # the same, normalised as containerd CRI looks it up
+OPERATOR_IMAGE_REF=docker.io/library/uavtest-operator:dev   # the operator image (same layers, its own config)
+MINIO_IMAGE_REF=uavtest.local/minio:dev   # MinIO for the chart's throwaway minio (layer 1 + the minio binary)
 
 # Go: caches under the cache dir so a warm machine rebuilds nothing and downloads nothing
 if ! command -v go >/dev/null 2>&1; then export PATH=/usr/local/go/bin:$PATH; fi
@@ -71,6 +77,8 @@ load_ports() {
   KCM_PORT=${KCM_PORT:-10257}; SCHEDULER_PORT=${SCHEDULER_PORT:-10259}
   KUBELET_PORT=${KUBELET_PORT:-10250}; KUBELET_HEALTHZ_PORT=${KUBELET_HEALTHZ_PORT:-10248}
   KWOK_PORT=${KWOK_PORT:-10247}
+  KUBE_PROXY_PORT=${KUBE_PROXY_PORT:-10256}; KUBE_PROXY_METRICS_PORT=${KUBE_PROXY_METRICS_PORT:-10249}
+  DNS_READY_PORT=${DNS_READY_PORT:-8181}
 }
 
 # ------------------------------------------------------------------ image building (no Docker)
@@ -157,8 +165,17 @@ debian_base_layer() {
 image_cache_hygiene() {
   local d
   for d in "$@"; do touch "$d/.used"; done
-  for d in "$IMG"/base-* "$IMG"/deps-* "$IMG"/buildenv-* "$IMG"/px4extra-*; do
+  for d in "$IMG"/base-* "$IMG"/deps-* "$IMG"/buildenv-* "$IMG"/px4extra-* "$IMG"/minio-*; do
     [ -d "$d" ] && [ -z "$(find "$d/.used" -mtime -3 2>/dev/null)" ] && rm -rf "$d"
   done
   true
 }
+
+# pod_gateway [SUBNET] : the bridge's own address in the pod subnet (its first host) and the prefix length,
+# e.g. "10.244.7.1 24": pods' default route, where the apiserver and the cluster DNS are reached from pods
+pod_gateway() {
+  python3 -c 'import ipaddress, sys; n = ipaddress.ip_network(sys.argv[1]); print(next(n.hosts()), n.prefixlen)' \
+    "${1:-${UAVTEST_POD_SUBNET:-10.244.7.0/24}}"
+}
+SERVICE_CIDR=10.0.0.0/24   # ClusterIPs; the apiserver's Service "kubernetes" is 10.0.0.1
+CLUSTER_DOMAIN=cluster.local

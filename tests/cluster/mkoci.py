@@ -8,7 +8,8 @@ mkoci.py layer [--empty SUBDIR]... DIR OUT.tar
     spec wants. Prints the layer's sha256.
 
 mkoci.py image --out OUT.tar --name NAME[:TAG] [--entrypoint JSON] [--cmd JSON] [--env K=V]...
-               [--workdir DIR] [--thin N] LAYER.tar [LAYER.tar ...]
+               [--workdir DIR] [--user UID:GID] [--port N]...
+               [--thin N] LAYER.tar [LAYER.tar ...]
     Assemble an OCI image layout archive (index.json, oci-layout, blobs) from uncompressed
     layer tars, lowest first, importable with `ctr -n k8s.io images import OUT.tar`.
     --thin N leaves the blobs of the N lowest layers out: such an archive imports only into a
@@ -116,6 +117,10 @@ def write_image(args: argparse.Namespace) -> None:
         config["Cmd"] = json.loads(args.cmd)
     if args.workdir:
         config["WorkingDir"] = args.workdir
+    if args.user:
+        config["User"] = args.user
+    if args.port:
+        config["ExposedPorts"] = {f"{p}/tcp": {} for p in args.port}
     cfg = json.dumps(
         {
             "architecture": "amd64",
@@ -190,6 +195,8 @@ def main(argv: list[str]) -> int:
     ip.add_argument("--cmd")
     ip.add_argument("--env", action="append")
     ip.add_argument("--workdir")
+    ip.add_argument("--user")
+    ip.add_argument("--port", action="append")
     ip.add_argument("--thin", type=int, default=0)
     ip.add_argument("layers", nargs="+")
     args = ap.parse_args(argv)

@@ -7,21 +7,27 @@
 # state (tasks, mounts, sockets) lives in DIR. Containers never outlive a cluster (removed on both ends).
 # Needs root. One real node per host at a time (kubelet and containerd hard-code a few host paths).
 # Env: UAVTEST_BRIDGE (default uavtest0), UAVTEST_POD_SUBNET (default 10.244.7.0/24).
+# The pod network is a real one: the bridge has the subnet's first address (pods' default route), kube-proxy
+# (iptables mode, on the host) gives Services their ClusterIPs (10.0.0.0/24; the apiserver is 10.0.0.1:443 when
+# up.sh had --pods), and CoreDNS on the bridge address is the cluster DNS (kubelet clusterDNS, cluster.local).
+# IPv4 forwarding is switched on while the node runs (down-real.sh puts the old value back).
 # Stop with down-real.sh DIR, which also undoes what kubelet/containerd changed on the host.
 set -euo pipefail
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
 D=$(cd "${1:?usage: up-real.sh DIR}" && pwd); load_ports "$D"
 [ -f "$D/kubeconfig" ] && [ -f "$D/apiserver.pid" ] || { log "run up.sh $D first"; exit 1; }
 [ "$(id -u)" = 0 ] || { log "up-real.sh needs root (containerd, runc, mounts, network namespaces)"; exit 1; }
-for f in "$DEBX/usr/bin/containerd" "$DEBX/usr/sbin/runc" "$DEBX/usr/lib/cni/bridge" "$BIN/kubelet" "$SHARE/pause.tar"; do
+for f in "$DEBX/usr/bin/containerd" "$DEBX/usr/sbin/runc" "$DEBX/usr/lib/cni/bridge" "$BIN/kubelet" "$SHARE/pause.tar" \
+         "$BIN/kube-proxy" "$BIN/coredns" "$IPTX/bin/iptables"; do
   [ -e "$f" ] || { log "missing $f: run build.sh first"; exit 1; }
 done
 BR=${UAVTEST_BRIDGE:-uavtest0}; SUBNET=${UAVTEST_POD_SUBNET:-10.244.7.0/24}
+read -r GW PREFIX < <(pod_gateway "$SUBNET")
 C=$D/ctr; KL=$D/kubelet; CROOT=${UAVTEST_CONTAINERD_ROOT:-$CACHE/containerd-root}
 export PATH=$DEBX/usr/bin:$DEBX/usr/sbin:$PATH   # containerd finds containerd-shim-runc-v2 on PATH
 K() { "$BIN/kubectl" --kubeconfig="$D/kubeconfig" "$@"; }
 t0=$(now)
-fail() { log "$1"; for f in "$D/logs/containerd.log" "$D/logs/kubelet.log"; do echo "--- $f" >&2; tail -n 30 "$f" >&2; done; exit 1; }
+fail() { log "$1"; for f in "$D"/logs/{containerd,kubelet,kube-proxy,coredns}.log; do echo "--- $f" >&2; tail -n 30 "$f" >&2; done; exit 1; }
 
 # one real node per host: test sessions sharing the machine take turns (UAVTEST_REAL_NODE_WAIT seconds at most)
 owner_alive() {   # owner_alive DIR UP_REAL_PID : is that cluster's up-real.sh, containerd or kubelet running?
@@ -54,7 +60,7 @@ done
   echo "BRIDGE=$BR"
   echo "CONTAINERD_ROOT=$CROOT"
   for s in vm/overcommit_memory vm/panic_on_oom kernel/panic kernel/panic_on_oops kernel/keys/root_maxkeys \
-           kernel/keys/root_maxbytes; do
+           kernel/keys/root_maxbytes net/ipv4/ip_forward; do
     [ -r "/proc/sys/$s" ] && echo "SYSCTL $s $(cat "/proc/sys/$s")"
   done
 } > "$D/host-state.txt"
@@ -97,8 +103,9 @@ EOF
 cat > "$C/cni/10-uavtest.conflist" <<EOF
 {"cniVersion": "1.0.0", "name": "uavtest",
  "plugins": [
-  {"type": "bridge", "bridge": "$BR", "isGateway": false, "ipMasq": false, "hairpinMode": false,
-   "ipam": {"type": "host-local", "dataDir": "$C/ipam", "ranges": [[{"subnet": "$SUBNET"}]]}},
+  {"type": "bridge", "bridge": "$BR", "isGateway": true, "ipMasq": false, "hairpinMode": true,
+   "ipam": {"type": "host-local", "dataDir": "$C/ipam", "ranges": [[{"subnet": "$SUBNET", "gateway": "$GW"}]],
+            "routes": [{"dst": "0.0.0.0/0"}]}},
   {"type": "loopback"}]}
 EOF
 cat > "$KL/config.yaml" <<EOF
@@ -128,7 +135,14 @@ imageGCLowThresholdPercent: 99
 evictionHard: {memory.available: "100Mi", nodefs.available: "1%", imagefs.available: "1%"}
 registerNode: true
 resolvConf: ""
+clusterDNS: [$GW]
+clusterDomain: $CLUSTER_DOMAIN
 EOF
+
+# the bridge, with its address, before anything listens on it (the CNI bridge plugin adopts it)
+ip link show "$BR" >/dev/null 2>&1 || ip link add "$BR" type bridge
+ip addr replace "$GW/$PREFIX" dev "$BR"; ip link set "$BR" up
+echo 1 > /proc/sys/net/ipv4/ip_forward   # pod -> Service -> pod goes through the host
 
 CTR=("$DEBX/usr/bin/ctr" --address "$C/containerd.sock" -n k8s.io)
 start_containerd() {
@@ -151,4 +165,45 @@ for c in $("${CTR[@]}" containers ls -q); do "${CTR[@]}" containers rm "$c" >/de
 echo $! > "$D/kubelet.pid"
 node_ready() { [ "$(K get node localhost -o 'jsonpath={.status.conditions[?(@.type=="Ready")].status}')" = True ]; }
 wait_for 90 node_ready || fail "node localhost not Ready after 90 s"
+
+# kube-proxy, iptables mode, with iptables from build.sh (nft backend). No conntrack sysctls are changed
+# (maxPerCore 0, timeouts 0) and no localhost NodePorts (no route_localnet): the host keeps its settings.
+cat > "$D/kube-proxy.yaml" <<EOF
+apiVersion: kubeproxy.config.k8s.io/v1alpha1
+kind: KubeProxyConfiguration
+clientConnection: {kubeconfig: $D/kubeconfig}
+hostnameOverride: localhost
+mode: iptables
+clusterCIDR: $SUBNET
+bindAddress: 127.0.0.1
+healthzBindAddress: 127.0.0.1:$KUBE_PROXY_PORT
+metricsBindAddress: 127.0.0.1:$KUBE_PROXY_METRICS_PORT
+conntrack: {maxPerCore: 0, min: 0, tcpEstablishedTimeout: 0s, tcpCloseWaitTimeout: 0s}
+iptables: {localhostNodePorts: false}
+EOF
+env PATH="$IPTX/bin:$PATH" LD_LIBRARY_PATH="$IPTX/usr/lib/x86_64-linux-gnu" \
+  XTABLES_LIBDIR="$IPTX/usr/lib/x86_64-linux-gnu/xtables" \
+  "$BIN/kube-proxy" --config="$D/kube-proxy.yaml" </dev/null >"$D/logs/kube-proxy.log" 2>&1 &
+echo $! > "$D/kube-proxy.pid"
+wait_for 60 curl -sf "http://127.0.0.1:$KUBE_PROXY_PORT/healthz" || fail "kube-proxy not healthy after 60 s"
+
+# the cluster DNS: CoreDNS on the bridge address, answering from the apiserver (Services, pods)
+cat > "$D/Corefile" <<EOF
+.:53 {
+    bind $GW
+    errors
+    ready 127.0.0.1:$DNS_READY_PORT
+    kubernetes $CLUSTER_DOMAIN in-addr.arpa ip6.arpa {
+        kubeconfig $D/kubeconfig
+        pods insecure
+        fallthrough in-addr.arpa ip6.arpa
+    }
+    forward . /etc/resolv.conf
+    cache 30
+    loop
+}
+EOF
+"$BIN/coredns" -conf "$D/Corefile" </dev/null >"$D/logs/coredns.log" 2>&1 &
+echo $! > "$D/coredns.pid"
+wait_for 60 curl -sf "http://127.0.0.1:$DNS_READY_PORT/ready" || fail "CoreDNS not ready after 60 s"
 log "real node up in $(since "$t0")s: $(K get node localhost --no-headers)"

@@ -1,18 +1,25 @@
 #!/bin/bash
-# up.sh DIR [--kwok] : control plane on 127.0.0.1 — etcd, kube-apiserver, kube-controller-manager,
+# up.sh DIR [--kwok] [--pods] : control plane on 127.0.0.1 — etcd, kube-apiserver, kube-controller-manager,
 # kube-scheduler — with its state, logs, PKI and kubeconfig in DIR. With --kwok also a kwok controller and
 # a fake node "kwok-node-0" (kwok runs nothing: every pod turns Running then Succeeded).
+# With --pods (a real node follows: up-real.sh) pods must reach the apiserver through its Service
+# (kubernetes.default, 10.0.0.1:443, kube-proxy): the apiserver advertises the pod bridge's own address
+# (pod_gateway in lib.sh) and so listens on every address, not only 127.0.0.1 (it allows no anonymous access).
 # Ports come from the environment (ETCD_PORT ETCD_PEER_PORT APISERVER_PORT KCM_PORT SCHEDULER_PORT
 # KUBELET_PORT KUBELET_HEALTHZ_PORT KWOK_PORT; defaults 2379 2380 6443 10257 10259 10250 10248 10247)
 # and are recorded in DIR/ports.env for the other scripts. Binaries come from build.sh.
 # Stop with down.sh DIR.
 set -euo pipefail
 . "$(dirname "${BASH_SOURCE[0]}")/lib.sh"
-D=${1:?usage: up.sh DIR [--kwok]}; KWOK=0; [ "${2:-}" = --kwok ] && KWOK=1
+D=${1:?usage: up.sh DIR [--kwok] [--pods]}; KWOK=0; PODS=0
+for a in "${@:2}"; do
+  case $a in --kwok) KWOK=1 ;; --pods) PODS=1 ;; *) log "up.sh: unknown option $a"; exit 2 ;; esac
+done
 mkdir -p "$D"; D=$(cd "$D" && pwd); mkdir -p "$D/logs"
 if [ ! -f "$D/ports.env" ]; then
   load_ports "$D"
-  for v in ETCD_PORT ETCD_PEER_PORT APISERVER_PORT KCM_PORT SCHEDULER_PORT KUBELET_PORT KUBELET_HEALTHZ_PORT KWOK_PORT; do
+  for v in ETCD_PORT ETCD_PEER_PORT APISERVER_PORT KCM_PORT SCHEDULER_PORT KUBELET_PORT KUBELET_HEALTHZ_PORT KWOK_PORT \
+           KUBE_PROXY_PORT KUBE_PROXY_METRICS_PORT DNS_READY_PORT; do
     echo "$v=${!v}"
   done > "$D/ports.env"
 fi
@@ -25,6 +32,8 @@ P=$D/pki; export KUBECONFIG=$D/kubeconfig
 K() { "$BIN/kubectl" --kubeconfig="$D/kubeconfig" "$@"; }
 t0=$(now)
 fail() { log "$1"; for f in "$D"/logs/*.log; do echo "--- $f" >&2; tail -n 20 "$f" >&2; done; exit 1; }
+BIND=127.0.0.1; ADVERTISE=127.0.0.1
+if [ "$PODS" = 1 ]; then read -r ADVERTISE _ < <(pod_gateway); BIND=0.0.0.0; fi
 
 "$BIN/etcd" --name=uavtest --data-dir="$D/etcd-data" \
   --listen-client-urls="http://127.0.0.1:$ETCD_PORT" --advertise-client-urls="http://127.0.0.1:$ETCD_PORT" \
@@ -34,12 +43,12 @@ fail() { log "$1"; for f in "$D"/logs/*.log; do echo "--- $f" >&2; tail -n 20 "$
 echo $! > "$D/etcd.pid"
 
 "$BIN/kube-apiserver" --etcd-servers="http://127.0.0.1:$ETCD_PORT" \
-  --bind-address=127.0.0.1 --advertise-address=127.0.0.1 --secure-port="$APISERVER_PORT" \
+  --bind-address="$BIND" --advertise-address="$ADVERTISE" --secure-port="$APISERVER_PORT" --anonymous-auth=false \
   --tls-cert-file="$P/apiserver.crt" --tls-private-key-file="$P/apiserver.key" \
   --client-ca-file="$P/ca.crt" --token-auth-file="$P/tokens.csv" \
   --service-account-issuer=https://kubernetes.default.svc.cluster.local \
   --service-account-key-file="$P/sa.pub" --service-account-signing-key-file="$P/sa.key" \
-  --service-cluster-ip-range=10.0.0.0/24 --authorization-mode=Node,RBAC --profiling=false \
+  --service-cluster-ip-range=$SERVICE_CIDR --authorization-mode=Node,RBAC --profiling=false \
   --kubelet-client-certificate="$P/admin.crt" --kubelet-client-key="$P/admin.key" \
   --kubelet-preferred-address-types=Hostname,InternalIP \
   </dev/null >"$D/logs/apiserver.log" 2>&1 &

@@ -9,6 +9,10 @@ Session-scoped (started on first use, stopped at the end of the session, also on
                      Succeeded. For scale / operator-logic tests. No root needed.
 - `runner_image`  -> "uavtest-runner:dev", built from the current working tree and imported into `cluster`'s
                      containerd; pods use it with imagePullPolicy: Never.
+- `operator_image`-> "uavtest-operator:dev": the same layers with the root Dockerfile's config (entrypoint
+                     `uavtest`, command `operator ...`, uid 65532), written by the same build; imported.
+- `minio_image`   -> "uavtest.local/minio:dev": the MinIO build.sh makes, on the image's Debian base; imported
+                     (for the chart's throwaway MinIO, `minio.enabled=true`).
 - `minio`         -> harness.minio.MinioServer: `.endpoint` (127.0.0.1:port), `.access_key`, `.secret_key`,
                      `.client()`.
 Module-scoped:
@@ -30,10 +34,14 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tests/ -> `import harness`
 
 from harness.cluster import (
+    MINIO_IMAGE,
+    OPERATOR_IMAGE,
     REPO_ROOT,
     RUNNER_IMAGE,
     Cluster,
+    ClusterError,
     build_runner_image,
+    image_archives,
     start_cluster,
     terminate_on_sigterm,
 )
@@ -80,6 +88,23 @@ def runner_image(cluster: Cluster) -> str:
     """The runner image built from the working tree, imported into the node; returns its name."""
     cluster.import_image(build_runner_image(REPO_ROOT))
     return RUNNER_IMAGE
+
+
+@pytest.fixture(scope="session")
+def operator_image(cluster: Cluster, runner_image: str) -> str:
+    """The operator image the runner image's build wrote beside it, imported into the node."""
+    cluster.import_image(image_archives()[OPERATOR_IMAGE])
+    return OPERATOR_IMAGE
+
+
+@pytest.fixture(scope="session")
+def minio_image(cluster: Cluster, runner_image: str) -> str:
+    """A MinIO image (build.sh's MinIO on the runner image's Debian base), imported into the node."""
+    archives = image_archives()
+    if MINIO_IMAGE not in archives:
+        raise ClusterError("no MinIO image archive: tests/cluster/build.sh minio did not run")
+    cluster.import_image(archives[MINIO_IMAGE])
+    return MINIO_IMAGE
 
 
 @pytest.fixture(scope="module")

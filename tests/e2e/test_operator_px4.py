@@ -160,9 +160,8 @@ def test_px4_replicas_fly_in_pods_and_their_ulogs_reach_the_store(
 
     # Events and metrics
     events = cluster.kubectl(
-        "get", "events", "-n", namespace, "--field-selector", f"involvedObject.name={name}"
+        "get", "events", "-n", namespace, "--field-selector", f"involvedObject.name={name}-g1"
     )
     assert "TestPassed" in events
-    labels = {"namespace": namespace, "test": name}
-    assert operator.metric("uavtest_replicas_total", verdict="pass", **labels) == REPLICAS
-    assert operator.metric("uavtest_test_flakiness", **labels) == 0
+    labels = {"test_namespace": namespace, "test": name}
+    assert operator.metric("uavtest_test_runs_total", result="succeeded", **labels) == 1

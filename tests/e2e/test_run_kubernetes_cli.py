@@ -127,3 +127,39 @@ def test_timeout_exits_3_and_leaves_the_test_running(
         if done.returncode == 3 and "run uavtestrun/" in done.stderr:
             created = " ".join(done.stderr.split()).split("run uavtestrun/", 1)[1].split(":")[0]
             cluster.kubectl("delete", "uavtestrun", created, "-n", namespace, "--timeout=120s", check=False)
+
+
+def test_two_tests_are_created_followed_and_reported_as_junit(
+    cluster: Cluster, namespace: str, operator: Operator, minio: MinioServer, tmp_path: Path
+) -> None:
+    import junitparser
+
+    slow = tmp_path / "hover-too-slow.yaml"
+    text = HOVER.read_text().replace("name: hover", "name: hover-too-slow")
+    slow.write_text(text.replace("maxFlightTime: 60", "maxFlightTime: 5"))
+    report = tmp_path / "report.xml"
+    out = tmp_path / "artifacts"
+    done = run_cli(
+        cluster,
+        minio,
+        *(str(HOVER), str(slow), "--namespace", namespace, "--replicas", "1"),
+        *("--junit", str(report), "--json", "--out", str(out), "--timeout", "1200"),
+    )
+    assert done.returncode == 1, (done.stderr[-4000:], operator.log_text()[-3000:])  # one test failed
+    summaries = [RunSummary.model_validate(s) for s in json.loads(done.stdout)]
+    assert [(s.verdict, s.passed, s.failed) for s in summaries] == [("pass", 1, 0), ("fail", 0, 1)]
+    assert [s.test for s in summaries] == ["hover", "hover-too-slow"]  # each test keeps its name
+    stderr = " ".join(done.stderr.split())
+    assert stderr.count("run uavtestrun/") == 2 and "exit 1: a test failed" in stderr
+    doc = junitparser.JUnitXml.fromfile(str(report))
+    assert [s.name for s in doc] == [s.test for s in summaries]
+    assert (doc.tests, doc.failures, doc.errors) == (2, 1, 0)
+    case = next(iter(list(doc)[1]))
+    assert "flight time" in case.result[0].message
+    links = dict(ln.split(": ", 1) for ln in (case.system_out or "").splitlines())
+    run_key = f"{namespace}/{summaries[1].test}/{summaries[1].run_id}/replica-0"
+    assert links["flight.ulg"].startswith("s3://") and links["flight.ulg"].endswith(f"{run_key}/flight.ulg")
+    # the operator's aggregation wrote the same suite to the store, next to summary.json
+    stored = out / namespace / summaries[1].test / summaries[1].run_id / "aggregate" / "junit.xml"
+    (suite,) = list(junitparser.JUnitXml.fromfile(str(stored)))
+    assert (suite.name, suite.tests, suite.failures) == (summaries[1].test, 1, 1)

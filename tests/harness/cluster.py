@@ -4,10 +4,13 @@
     c = start_cluster(real_node=True)     # etcd + apiserver + kcm + scheduler + containerd + kubelet
     c.kubectl("get", "nodes")             # always against this cluster's own kubeconfig
     c.import_image(build_runner_image())  # the runner image, from the current working tree
+    c.import_image(image_archives()[OPERATOR_IMAGE])  # the operator image that build wrote beside it
+    c.helm("install", "uavtest", "charts/uavtest", "-n", "ns", "--create-namespace")
     c.stop()                              # down-real.sh: nothing left on the host
 
 Only one real-node cluster can run on a host at a time; kwok clusters (control plane + fake node, pods
-never run) can run beside it. Every port is on 127.0.0.1 and picked free at start.
+never run) can run beside it. Every port is on 127.0.0.1 and picked free at start (a real-node cluster's
+apiserver listens on all addresses and CoreDNS on the pod bridge's: pods reach them there).
 """
 
 from __future__ import annotations
@@ -32,6 +35,8 @@ from typing import Any
 __all__ = [
     "CACHE_DIR",
     "CLUSTER_SCRIPTS",
+    "MINIO_IMAGE",
+    "OPERATOR_IMAGE",
     "REPO_ROOT",
     "RUNNER_IMAGE",
     "Cluster",
@@ -39,7 +44,9 @@ __all__ = [
     "KubectlError",
     "build_binaries",
     "build_runner_image",
+    "containerd_ref",
     "free_ports",
+    "image_archives",
     "start_cluster",
     "terminate_on_sigterm",
 ]
@@ -53,6 +60,10 @@ BIN_DIR = CACHE_DIR / "bin"
 RUNNER_IMAGE = "uavtest-runner:dev"
 """The name pod specs use for the runner image (with imagePullPolicy: Never)."""
 RUNNER_IMAGE_ARCHIVE = CACHE_DIR / "share" / "uavtest-runner-dev.tar"
+OPERATOR_IMAGE = "uavtest-operator:dev"
+"""The operator image: the root Dockerfile's, built without Docker beside the runner's."""
+MINIO_IMAGE = "uavtest.local/minio:dev"
+"""MinIO (the binary build.sh makes, on the Debian base) for the chart's throwaway MinIO."""
 
 BUILD_TIMEOUT = 60 * 60
 UP_TIMEOUT = 5 * 60
@@ -67,6 +78,9 @@ PORT_NAMES = (
     "KUBELET_PORT",
     "KUBELET_HEALTHZ_PORT",
     "KWOK_PORT",
+    "KUBE_PROXY_PORT",
+    "KUBE_PROXY_METRICS_PORT",
+    "DNS_READY_PORT",
 )
 # flags that would point kubectl at another cluster than the harness's own
 FOREIGN_FLAGS = ("--kubeconfig", "--context", "--cluster", "--server", "-s", "--user", "--token")
@@ -144,6 +158,28 @@ def build_runner_image(
     args = [str(repo_root), str(archive), *(["--full"] if full else [])]
     _run_script("build-runner-image.sh", *args, timeout=BUILD_TIMEOUT)
     return archive
+
+
+HELM_HOMES = ("CACHE", "CONFIG", "DATA")  # helm's dirs: in the cluster dir, not in $HOME
+
+
+def image_archives(runner_archive: Path | str = RUNNER_IMAGE_ARCHIVE) -> dict[str, Path]:
+    """The archives build_runner_image writes: image name -> OCI archive (MinIO if build.sh made it)."""
+    d = Path(runner_archive).parent
+    out = {RUNNER_IMAGE: Path(runner_archive), OPERATOR_IMAGE: d / "uavtest-operator-dev.tar"}
+    if (d / "minio.tar").exists():
+        out[MINIO_IMAGE] = d / "minio.tar"
+    return out
+
+
+def containerd_ref(name: str) -> str:
+    """NAME as containerd's CRI stores it: `uavtest-runner:dev` -> `docker.io/library/uavtest-runner:dev`."""
+    first, _, rest = name.partition("/")
+    if not rest:
+        return f"docker.io/library/{name}"
+    if "." in first or ":" in first or first == "localhost":
+        return name
+    return f"docker.io/{name}"
 
 
 def free_ports(n: int) -> list[int]:
@@ -296,6 +332,28 @@ class Cluster:
             raise ClusterError("no containerd: this cluster has no real node")
         _run_script("import-image.sh", str(self.dir), str(archive), timeout=UP_TIMEOUT)
 
+    def tag_image(self, source: str, target: str) -> None:
+        """Give an imported image a second name (`ctr images tag`), e.g. the one a chart defaults to."""
+        self.ctr("images", "tag", "--force", containerd_ref(source), containerd_ref(target))
+
+    def helm(self, *args: str, timeout: float = 300) -> str:
+        """Run the cached helm against this cluster (its kubeconfig only); return stdout."""
+        for a in args:
+            if a.split("=", 1)[0] in (*FOREIGN_FLAGS, "--kube-context", "--kube-apiserver", "--kube-token"):
+                raise ClusterError(f"helm {a!r}: the harness only talks to its own cluster")
+        proc = subprocess.run(
+            [str(BIN_DIR / "helm"), f"--kubeconfig={self.kubeconfig}", *args],
+            capture_output=True,
+            text=True,
+            timeout=timeout,
+            check=False,
+            cwd=REPO_ROOT,
+            env={**os.environ, **{f"HELM_{k}_HOME": str(self.dir / "helm" / k) for k in HELM_HOMES}},
+        )
+        if proc.returncode != 0:
+            raise ClusterError(f"helm {' '.join(args)} -> exit {proc.returncode}: {proc.stderr.strip()}")
+        return proc.stdout
+
     # ------------------------------------------------------------------ lifecycle
     def assert_own(self) -> None:
         """Refuse to go on unless the kubeconfig in use is this cluster's own, on 127.0.0.1."""
@@ -361,7 +419,8 @@ def start_cluster(
         _LIVE.add(cluster)
     env = {k: str(v) for k, v in ports.items()}
     try:
-        _run_script("up.sh", str(d), *(["--kwok"] if kwok else []), env=env, timeout=UP_TIMEOUT)
+        opts = [*(["--kwok"] if kwok else []), *(["--pods"] if real_node else [])]
+        _run_script("up.sh", str(d), *opts, env=env, timeout=UP_TIMEOUT)
         if real_node:
             _run_script("up-real.sh", str(d), env=env, timeout=REAL_NODE_TIMEOUT)
         cluster.assert_own()

@@ -1,16 +1,20 @@
-"""``uavtest run TEST --engine kubernetes``: apply the test in a cluster, follow its run, exit.
+"""``uavtest run TEST... --engine kubernetes``: apply each test in a cluster, follow its run, exit.
 
-The test keeps its identity (``metadata.name``): the rendered test is created, or the UavTest of
-that name gets the new spec. Each call starts one run (a ``UavTestRun`` the operator creates under
+A test keeps its identity (``metadata.name``): the rendered test is created, or the UavTest of
+that name gets the new spec. Each apply starts one run (a ``UavTestRun`` the operator creates under
 a name known in advance): a changed spec starts the run ``<test>-g<generation>``; an unchanged one
 sets the ``uavtest.io/rerun`` annotation to a fresh value, which starts ``<test>-r<hash>``.
-Progress comes from watching that run's status, and the exit code is the local engine's: 0 every
-replica passed, 1 some replica failed, 2 bad input (also a
-test the API server rejects), 3 bench errors only, or the cluster could not be used.
+Progress comes from watching those runs' status, and the exit code is the local engine's: 0 every
+replica passed, 1 some replica failed, 2 bad input (also a test the API server rejects), 3 bench
+errors only, or the cluster could not be used.
 
 ``--replicas`` / ``--seed`` override the spec before it is created; ``--json`` prints the local
 engine's ``RunSummary``; ``--out`` downloads the run's artifacts (``cluster_download``);
-``--timeout`` gives up waiting (exit 3) and leaves the run going.
+``--timeout`` gives up waiting (exit 3) and leaves the runs going; ``--junit`` writes the runs
+as JUnit XML (from the store's ``summary.json`` when ``--out`` brought it home, else from the status,
+with each replica's ``s3://`` artifact URIs). Several tests are all rendered and dry-run created
+first (a wrong one: exit 2, nothing applied), then applied and their runs followed together; one exit code
+(``uavtest.run_many``).
 """
 
 from __future__ import annotations
@@ -34,17 +38,19 @@ from uavtest.controller.cluster_download import check_download_settings, downloa
 from uavtest.controller.status import is_final
 from uavtest.errors import BadInput, ExitCode, InfrastructureError, UavTestError
 from uavtest.spec.models import UavTest
-from uavtest.store.layout import SUMMARY, aggregate_key, run_prefix
+from uavtest.store.layout import FLIGHT_LOG, RESULT, SUMMARY, aggregate_key, replica_key, run_prefix
 
 __all__ = [
     "ClusterRunOptions",
     "apply_overrides",
     "exit_code_for",
     "progress_text",
+    "replica_links",
     "results_table",
     "run_in_cluster",
     "still_running_message",
     "summary_from_status",
+    "watch_seconds",
     "with_download",
 ]
 
@@ -52,6 +58,11 @@ MAX_REPLICAS = 1000  # spec.replicas' bound
 MAX_SEED = 2**32 - 1  # spec.seed's bound
 
 _WATCH_SECONDS = 60
+
+
+def watch_seconds(left: float) -> int:
+    """Seconds for one watch request: at most a minute, at least 1, ``left`` may be infinite."""
+    return max(1, math.ceil(min(float(_WATCH_SECONDS), left)))
 
 
 def exit_code_for(status: Mapping[str, Any]) -> ExitCode:
@@ -123,21 +134,23 @@ def _namespace(manifest: Mapping[str, Any], namespace: str | None) -> str:
         return "default"
 
 
-def _apply(custom: Any, namespace: str, manifest: dict[str, Any]) -> str:
-    """Create the UavTest, or give the existing one this spec; the name of the run this starts."""
+def _apply(custom: Any, namespace: str, manifest: dict[str, Any], *, dry_run: bool = False) -> str:
+    """Create the UavTest, or give the existing one this spec (``dry_run``: have the API server
+    check it without keeping it); the name of the run this starts."""
     from kubernetes.client.exceptions import ApiException
 
     from uavtest.controller.runs import generation_run_name, rerun_name, spec_hash
 
     name = str(manifest["metadata"]["name"])
     args = (names.API_GROUP, names.VERSION, namespace, names.PLURAL)
+    extra = {"dry_run": "All"} if dry_run else {}
     try:
         try:
             existing = custom.get_namespaced_custom_object(*args, name)
         except ApiException as e:
             if e.status != 404:
                 raise
-            created = custom.create_namespaced_custom_object(*args, manifest)
+            created = custom.create_namespaced_custom_object(*args, manifest, **extra)
             return generation_run_name(name, int(created["metadata"].get("generation") or 1))
         body = dict(existing)
         meta = dict(body["metadata"])
@@ -147,10 +160,10 @@ def _apply(custom: Any, namespace: str, manifest: dict[str, Any]) -> str:
             meta["annotations"] = {**(meta.get("annotations") or {}), names.RERUN_ANNOTATION: token}
         body["metadata"] = meta
         body["spec"] = manifest["spec"]
-        replaced = custom.replace_namespaced_custom_object(*args, name, body)
+        replaced = custom.replace_namespaced_custom_object(*args, name, body, **extra)
     except ApiException as e:
         if e.status in (400, 422):
-            raise BadInput(f"the cluster rejected the test: {_api_message(e)}") from None
+            raise BadInput(f"the cluster rejected the test {name}: {_api_message(e)}") from None
         if e.status == 404:
             raise InfrastructureError(
                 f"no UavTest API in the cluster (or no namespace {namespace}): install the CRDs "
@@ -176,16 +189,18 @@ def _api_message(e: Any) -> str:
 
 
 def _follow(
-    custom: Any, namespace: str, name: str, console: Console, *, timeout: float | None = None
-) -> dict[str, Any]:
-    """Watch the UavTestRun ``name`` (it may not exist yet) until its status is final or ``timeout``
-    seconds pass; show progress meanwhile; return the latest status (``is_final`` tells which)."""
+    custom: Any, namespace: str, wanted: list[str], console: Console, *, timeout: float | None = None
+) -> dict[str, dict[str, Any]]:
+    """Watch the UavTestRuns ``wanted`` (they may not exist yet) until every status is final or
+    ``timeout`` seconds pass; show a progress line per run meanwhile; return each one's latest
+    status (``is_final`` tells which)."""
     import kubernetes
     from kubernetes.client.exceptions import ApiException
     from urllib3.exceptions import HTTPError
 
     deadline = math.inf if timeout is None else time.monotonic() + timeout
-    status: dict[str, Any] = {}
+    statuses: dict[str, dict[str, Any]] = {name: {} for name in wanted}
+    selector = {"field_selector": f"metadata.name={wanted[0]}"} if len(wanted) == 1 else {}
     columns = (
         TextColumn("[bold]{task.description}"),
         BarColumn(),
@@ -193,11 +208,15 @@ def _follow(
         TextColumn("{task.fields[line]}"),
         TimeElapsedColumn(),
     )
+
+    def all_final() -> bool:
+        return all(is_final(st) for st in statuses.values())
+
     with Progress(*columns, console=console, transient=False) as progress:
-        task = progress.add_task(name, total=None, line="Pending")
+        tasks = {name: progress.add_task(name, total=None, line="Pending") for name in wanted}
         resource_version = None
         failures = 0
-        while not is_final(status):
+        while not all_final():
             left = deadline - time.monotonic()
             if left <= 0:
                 break
@@ -209,40 +228,48 @@ def _follow(
                     names.VERSION,
                     namespace,
                     names.RUN_PLURAL,
-                    field_selector=f"metadata.name={name}",
                     resource_version=resource_version,
-                    timeout_seconds=max(1, math.ceil(min(left, _WATCH_SECONDS))),  # left may be inf
+                    timeout_seconds=watch_seconds(left),
+                    **selector,
                 ):
                     obj = event["object"]
-                    if event["type"] == "DELETED":
-                        raise InfrastructureError(f"uavtestrun/{name} was deleted before it finished")
                     if event["type"] == "ERROR":
                         resource_version = None
                         break
                     resource_version = obj["metadata"].get("resourceVersion")
-                    status = obj.get("status") or {}
+                    name = obj["metadata"].get("name")
+                    if name not in statuses:
+                        continue
+                    if event["type"] == "DELETED":
+                        raise InfrastructureError(f"uavtestrun/{name} was deleted before it finished")
+                    status = statuses[name] = obj.get("status") or {}
                     done = sum(int(status.get(k) or 0) for k in ("passed", "failed", "errors"))
                     progress.update(
-                        task, total=status.get("replicas") or None, completed=done, line=progress_text(status)
+                        tasks[name],
+                        total=status.get("replicas") or None,
+                        completed=done,
+                        line=progress_text(status),
                     )
                     failures = 0
-                    if is_final(status) or time.monotonic() >= deadline:
+                    if all_final() or time.monotonic() >= deadline:
                         break
             except ApiException as e:
                 if e.status == 410:  # resourceVersion too old: list again
                     resource_version = None
                     continue
-                raise InfrastructureError(f"watching uavtestrun/{name} failed: {_api_message(e)}") from None
+                raise InfrastructureError(
+                    f"watching uavtestrun/{', '.join(wanted)} failed: {_api_message(e)}"
+                ) from None
             except HTTPError as e:
                 failures += 1
                 if failures > 5:
                     raise InfrastructureError(
-                        f"lost the cluster while watching uavtestrun/{name}: {e}"
+                        f"lost the cluster while watching {', '.join(wanted)}: {e}"
                     ) from None
                 time.sleep(min(2.0**failures, 30.0, max(deadline - time.monotonic(), 0.0)))
             finally:
                 watch.stop()
-    return status
+    return statuses
 
 
 def still_running_message(name: str, namespace: str, status: Mapping[str, Any], timeout: float) -> str:
@@ -320,7 +347,7 @@ def apply_overrides(test: UavTest, *, replicas: int | None, seed: int | None) ->
 class ClusterRunOptions:
     """``uavtest run --engine kubernetes``'s options."""
 
-    test: Path
+    tests: list[Path]
     namespace: str | None = None
     wait: bool = True
     replicas: int | None = None
@@ -328,6 +355,7 @@ class ClusterRunOptions:
     out: Path | None = None
     json_out: bool = False
     timeout: float | None = None
+    junit: Path | None = None
 
 
 def _download(status: Mapping[str, Any], name: str, ns: str, out: Path, console: Console) -> str | None:
@@ -360,52 +388,72 @@ def _summary(status: Mapping[str, Any], name: str, ns: str, out: Path | None, do
     return summary_from_status(name, ns, status)
 
 
-def run_in_cluster(opts: ClusterRunOptions, *, console: Console | None = None) -> int:
-    """Apply the rendered test and start a run of it; with ``wait``, follow the run, return its exit code.
+def replica_links(
+    status: Mapping[str, Any], name: str, ns: str, indices: list[int]
+) -> dict[int, dict[str, str]]:
+    """Each replica's flight log and result URI, from the status' ``artifacts.store`` (empty when the
+    status names none)."""
+    run_id = str(status.get("runId") or "")
+    where = (status.get("artifacts") or {}).get("store")
+    if not run_id or not where:
+        return {}
+    try:
+        root = store_root(str(where), ns, name, run_id).rstrip("/")
+    except UavTestError:
+        return {}
+    return {
+        i: {f: f"{root}/{replica_key(ns, name, run_id, i, f)}" for f in (FLIGHT_LOG, RESULT)} for i in indices
+    }
 
-    ``--out`` is checked before anything is created (exit 2 without the S3 settings); a download
-    that fails afterwards is said on stderr and makes a passing run exit 3 (a failing one stays 1).
-    ``--timeout`` running out exits 3 and leaves the run going.
-    """
-    import os
 
-    from uavtest.controller.kube import api_client
+@dataclass
+class _Prepared:
+    source: Path
+    test: UavTest
+    manifest: dict[str, Any]
+    namespace: str
+    name: str = ""
+    run: str = ""  # the UavTestRun the apply started
+
+
+def _prepare(opts: ClusterRunOptions, console: Console) -> list[_Prepared]:
+    """Every test read, overridden and rendered before anything is created; each wrong file said,
+    then BadInput (exit 2, nothing created)."""
     from uavtest.spec.loaders import load_test
     from uavtest.spec.render import render
 
-    console = console or Console(stderr=True)
-    if opts.timeout is not None and not opts.timeout > 0:
-        raise BadInput("must be positive", field="--timeout", value=opts.timeout, allowed="seconds > 0")
-    if opts.out is not None and opts.wait:
-        check_download_settings(os.environ)
-    test = apply_overrides(load_test(Path(opts.test)), replicas=opts.replicas, seed=opts.seed)
-    manifest = render(test)
-    ns = _namespace(manifest, opts.namespace)
-    manifest["metadata"]["namespace"] = ns
-    import kubernetes
-
-    try:
-        client = api_client()
-    except (kubernetes.config.ConfigException, OSError) as e:
-        raise InfrastructureError(f"no cluster to talk to (KUBECONFIG / in-cluster config): {e}") from None
-    with client:
-        custom = kubernetes.client.CustomObjectsApi(client)
-        name = str(manifest["metadata"]["name"])
-        run_name = _apply(custom, ns, manifest)
-        spec = test.spec
-        console.print(
-            f"applied uavtest/{name} in namespace {ns}, run uavtestrun/{run_name}: {spec.replicas} "
-            f"replica(s), seeds {spec.replica_seed(0)}..{spec.replica_seed(spec.replicas - 1)}",
-            highlight=False,
+    prepared: list[_Prepared] = []
+    wrong: list[str] = []
+    for path in opts.tests:
+        try:
+            test = apply_overrides(load_test(Path(path)), replicas=opts.replicas, seed=opts.seed)
+        except BadInput as e:
+            if len(opts.tests) == 1:
+                raise
+            console.print(f"[bold red]error:[/] {e}", highlight=False, soft_wrap=True)
+            wrong.append(str(path))
+            continue
+        manifest = render(test)
+        ns = _namespace(manifest, opts.namespace)
+        manifest["metadata"]["namespace"] = ns
+        prepared.append(_Prepared(Path(path), test, manifest, ns, name=str(manifest["metadata"]["name"])))
+    if wrong:
+        raise BadInput(
+            f"{len(wrong)} of {len(opts.tests)} test files are wrong (above); nothing was created",
+            value=", ".join(wrong),
         )
-        if not opts.wait:
-            return int(ExitCode.PASS)
-        status = _follow(custom, ns, run_name, console, timeout=opts.timeout)
+    return prepared
+
+
+def _report(
+    p: _Prepared, status: Mapping[str, Any], opts: ClusterRunOptions, console: Console
+) -> tuple[int, RunSummary | None, str]:
+    """Say one final (or timed-out) test's results; its exit code, summary and (when not final) why."""
     if not is_final(status):  # only when --timeout ran out
-        text = still_running_message(run_name, ns, status, opts.timeout or 0.0)
+        text = still_running_message(p.run or p.name, p.namespace, status, opts.timeout or 0.0)
         console.print(text, highlight=False, soft_wrap=True)
-        return int(ExitCode.INFRASTRUCTURE)
-    console.print(results_table(name, status))
+        return int(ExitCode.INFRASTRUCTURE), None, text
+    console.print(results_table(p.name, status))
     console.print(status.get("message") or progress_text(status), highlight=False)
     summary_uri = (status.get("artifacts") or {}).get("summary")
     if summary_uri:
@@ -413,8 +461,78 @@ def run_in_cluster(opts: ClusterRunOptions, *, console: Console | None = None) -
     code = int(exit_code_for(status))
     download_error = None
     if opts.out is not None and code != ExitCode.BAD_INPUT:
-        download_error = _download(status, name, ns, opts.out, console)
+        download_error = _download(status, p.name, p.namespace, opts.out, console)
+    summary = _summary(status, p.name, p.namespace, opts.out, download_error is None and opts.out is not None)
+    return with_download(code, download_error), summary, ""
+
+
+def run_in_cluster(opts: ClusterRunOptions, *, console: Console | None = None) -> int:
+    """Create each rendered test as a new UavTest; with ``wait``, follow them all and return one
+    exit code (``uavtest.run_many.combined_exit``).
+
+    Every file is read and checked by the API server (a dry run) before any is created: a wrong
+    one exits 2 and nothing is created. ``--out`` is checked first too (exit 2 without the S3
+    settings); a download that fails afterwards is said on stderr and makes a passing run exit 3 (a
+    failing one stays 1). ``--timeout`` running out exits 3 and leaves the UavTests running.
+    """
+    import os
+
+    from uavtest.controller.kube import api_client
+    from uavtest.run_many import (
+        TestOutcome,
+        combined_exit,
+        exit_meaning,
+        json_report,
+        junit_report,
+        suite_table,
+        write_junit,
+    )
+
+    console = console or Console(stderr=True)
+    if opts.timeout is not None and not opts.timeout > 0:
+        raise BadInput("must be positive", field="--timeout", value=opts.timeout, allowed="seconds > 0")
+    if opts.out is not None and opts.wait:
+        check_download_settings(os.environ)
+    prepared = _prepare(opts, console)
+    import kubernetes
+
+    try:
+        client = api_client()
+    except (kubernetes.config.ConfigException, OSError) as e:
+        raise InfrastructureError(f"no cluster to talk to (KUBECONFIG / in-cluster config): {e}") from None
+    statuses: dict[str, dict[str, Any]] = {}
+    with client:
+        custom = kubernetes.client.CustomObjectsApi(client)
+        if len(prepared) > 1:
+            for p in prepared:
+                _apply(custom, p.namespace, p.manifest, dry_run=True)
+        for p in prepared:
+            p.run = _apply(custom, p.namespace, p.manifest)
+            spec = p.test.spec
+            console.print(
+                f"applied uavtest/{p.name} in namespace {p.namespace}, run uavtestrun/{p.run}: "
+                f"{spec.replicas} replica(s), "
+                f"seeds {spec.replica_seed(0)}..{spec.replica_seed(spec.replicas - 1)}",
+                highlight=False,
+            )
+        if not opts.wait:
+            return int(ExitCode.PASS)
+        for ns in dict.fromkeys(p.namespace for p in prepared):
+            wanted = [p.run for p in prepared if p.namespace == ns]
+            statuses.update(_follow(custom, ns, wanted, console, timeout=opts.timeout))
+    outcomes = []
+    for p in prepared:
+        code, summary, why = _report(p, statuses[p.run], opts, console)
+        links = {}
+        if summary is not None:
+            links = replica_links(statuses[p.run], p.name, p.namespace, [r.index for r in summary.results])
+        outcomes.append(TestOutcome(p.source, p.name, code, summary, why, p.namespace, links))
+    if opts.junit is not None:
+        write_junit(opts.junit, junit_report(outcomes), console)
     if opts.json_out:
-        summary = _summary(status, name, ns, opts.out, download_error is None and opts.out is not None)
-        print(summary.model_dump_json(indent=2))
-    return with_download(code, download_error)
+        print(json_report(outcomes))
+    code = combined_exit(o.code for o in outcomes)
+    if len(outcomes) > 1:
+        console.print(suite_table(outcomes))
+        console.print(f"exit {int(code)}: {exit_meaning(code)}", highlight=False)
+    return int(code)

@@ -16,9 +16,10 @@ from uavtest.errors import UavTestError
 from uavtest.spec.models import UavTestSpec
 from uavtest.spec.px4_params import unmodelled_params
 from uavtest.store import ArtifactStore
-from uavtest.store.layout import aggregate_key, replica_key
+from uavtest.store.layout import FLIGHT_LOG, JUNIT, RESULT, SUMMARY, aggregate_key, replica_key
+from uavtest.store.local import LocalStore
 
-__all__ = ["aggregate_run", "load_replica"]
+__all__ = ["aggregate_run", "artifact_links", "load_replica"]
 
 
 def _missing(index: int, seed: int, what: str) -> ReplicaResult:
@@ -64,6 +65,20 @@ def _reference(spec: UavTestSpec) -> Trajectory | None:
     return Trajectory(t, x, y, z)
 
 
+def artifact_links(
+    store: ArtifactStore, namespace: str, test: str, run_id: str, indices: Iterable[int]
+) -> dict[int, dict[str, str]]:
+    """Each replica's flight log and result: file paths in a local store, else the store's URIs."""
+
+    def where(key: str) -> str:
+        return str(store.path(key)) if isinstance(store, LocalStore) else store.url(key)
+
+    return {
+        i: {name: where(replica_key(namespace, test, run_id, i, name)) for name in (FLIGHT_LOG, RESULT)}
+        for i in indices
+    }
+
+
 def aggregate_run(
     store: ArtifactStore,
     namespace: str,
@@ -74,11 +89,12 @@ def aggregate_run(
 ) -> RunSummary:
     """Read the replicas ``indices`` of a run, write ``aggregate/*`` and return the summary.
 
-    Writes ``aggregate/summary.json`` always, and ``aggregate/average.csv`` and
+    Writes ``aggregate/summary.json`` and ``aggregate/junit.xml`` always, and ``aggregate/average.csv`` and
     ``aggregate/trajectories.png`` when at least one replica has a trajectory.
     """
     from uavtest.analysis.average import average_trajectories
     from uavtest.analysis.flakiness import summarize
+    from uavtest.analysis.junit import junit_document, run_suite
     from uavtest.analysis.plots import plot_run
     from uavtest.analysis.verdict import simulator_warnings
 
@@ -106,8 +122,15 @@ def aggregate_run(
             title=f"{test} · run {run_id} · {summary.passed} passed, {summary.failed} failed",
         )
         store.put(aggregate_key(namespace, test, run_id, "trajectories.png"), png, "image/png")
+    # junit.xml before summary.json: summary.json is the last artifact, the sign aggregation ended
+    links = artifact_links(store, namespace, test, run_id, (r.index for r in summary.results))
     store.put(
-        aggregate_key(namespace, test, run_id, "summary.json"),
+        aggregate_key(namespace, test, run_id, JUNIT),
+        junit_document([run_suite(summary, links)]),
+        "application/xml",
+    )
+    store.put(
+        aggregate_key(namespace, test, run_id, SUMMARY),
         summary.model_dump_json(indent=2).encode(),
         "application/json",
     )

@@ -1,16 +1,66 @@
-"""``uavtest run`` with the local engine: fly, then print the table, the summary and the paths."""
+"""``uavtest run`` with the local engine: fly each test, then print its table, summary and paths.
+
+Several tests (``uavtest run tests/``) are all read and checked first — a wrong file exits 2
+before anything flies — then flown one after the other (each test's replicas in parallel), with
+one table over the tests and one exit code (``uavtest.run_many``).
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rich.console import Console
+
+from uavtest.errors import BadInput, UavTestError
+
+if TYPE_CHECKING:
+    from uavtest.engine.local import LocalRun
 
 __all__ = ["run_command"]
 
 
+def _print_run(stdout: Console, run: LocalRun) -> None:
+    from uavtest.engine.outcome import results_table, summary_line, unmodelled_line
+
+    summary = run.summary
+    stdout.print(results_table(summary))
+    stdout.print(summary_line(summary), highlight=False)
+    warning = unmodelled_line(summary)
+    if warning:
+        stdout.print(warning, highlight=False)
+    for w in summary.warnings:
+        stdout.print(f"warning: {w}", highlight=False)
+    stdout.print(f"summary: {run.summary_path}", highlight=False)
+    if run.plot_path is not None:
+        stdout.print(f"plot:    {run.plot_path}", highlight=False)
+
+
+def _preflight_all(tests: list[Path], err: Console) -> dict[Path, str]:
+    """Each file's test name; every wrong file said on stderr, then BadInput (nothing flies)."""
+    from uavtest.engine.local import preflight
+
+    names: dict[Path, str] = {}
+    wrong: list[str] = []
+    for path in tests:
+        try:
+            names[path] = preflight(path).metadata.name
+        except BadInput as e:
+            wrong.append(str(path))
+            if len(tests) > 1:
+                err.print(f"[bold red]error:[/] {e}", highlight=False, soft_wrap=True)
+            else:
+                raise
+    if wrong:
+        raise BadInput(
+            f"{len(wrong)} of {len(tests)} test files are wrong (above); nothing was flown",
+            value=", ".join(wrong),
+        )
+    return names
+
+
 def run_command(
-    test: Path,
+    tests: list[Path],
     *,
     replicas: int | None = None,
     jobs: int | None = None,
@@ -18,27 +68,56 @@ def run_command(
     seed: int | None = None,
     replica: int | None = None,
     json_out: bool = False,
+    junit: Path | None = None,
 ) -> int:
-    """Run a test locally and report it; returns the exit code (see ``uavtest.engine.outcome``)."""
-    from uavtest.engine.local import RunOptions, run_local
-    from uavtest.engine.outcome import exit_code, results_table, summary_line, unmodelled_line
+    """Run the tests locally and report them; returns the exit code (``uavtest.run_many``)."""
+    from uavtest.engine.aggregate import artifact_links
+    from uavtest.engine.local import NAMESPACE, RunOptions, run_local
+    from uavtest.engine.outcome import exit_code
+    from uavtest.run_many import (
+        TestOutcome,
+        combined_exit,
+        exit_meaning,
+        json_report,
+        junit_report,
+        suite_table,
+        write_junit,
+    )
+    from uavtest.store import LocalStore
 
     err = Console(stderr=True)
-    options = RunOptions(test=test, replicas=replicas, jobs=jobs, out=out, seed=seed, replica=replica)
-    run = run_local(options, console=err)
-    summary = run.summary
+    stdout = Console(soft_wrap=True)
+    names = _preflight_all(tests, err)
+    several = len(tests) > 1
+    outcomes: list[TestOutcome] = []
+    for n, test in enumerate(tests, 1):
+        if several:
+            err.rule(f"test {n}/{len(tests)}: {test}", align="left")
+        options = RunOptions(test=test, replicas=replicas, jobs=jobs, out=out, seed=seed, replica=replica)
+        try:
+            run = run_local(options, console=err)
+        except UavTestError as e:
+            # one test: as always, the error and its exit code (with --junit, a bench error is
+            # reported first); several: said, recorded, and the next test flies
+            if not several and (junit is None or isinstance(e, BadInput)):
+                raise
+            err.print(f"[bold red]error:[/] {test}: {e}", highlight=False, soft_wrap=True)
+            outcomes.append(
+                TestOutcome(test, names[test], int(e.exit_code), message=str(e), namespace=NAMESPACE)
+            )
+            continue
+        s = run.summary
+        links = artifact_links(LocalStore(out), NAMESPACE, s.test, s.run_id, (r.index for r in s.results))
+        outcomes.append(TestOutcome(test, s.test, int(exit_code(s)), s, namespace=NAMESPACE, links=links))
+        if not json_out:
+            _print_run(stdout, run)
+    if junit is not None:
+        write_junit(junit, junit_report(outcomes), err)
     if json_out:
-        print(summary.model_dump_json(indent=2))
-    else:
-        stdout = Console(soft_wrap=True)
-        stdout.print(results_table(summary))
-        stdout.print(summary_line(summary), highlight=False)
-        warning = unmodelled_line(summary)
-        if warning:
-            stdout.print(warning, highlight=False)
-        for w in summary.warnings:
-            stdout.print(f"warning: {w}", highlight=False)
-        stdout.print(f"summary: {run.summary_path}", highlight=False)
-        if run.plot_path is not None:
-            stdout.print(f"plot:    {run.plot_path}", highlight=False)
-    return int(exit_code(summary))
+        print(json_report(outcomes))
+    elif several:
+        stdout.print(suite_table(outcomes))
+    code = combined_exit(o.code for o in outcomes)
+    if several and not json_out:
+        stdout.print(f"exit {int(code)}: {exit_meaning(code)}", highlight=False)
+    return int(code)

@@ -42,6 +42,7 @@ __all__ = [
     "RunOptions",
     "aerialist_simulator_notice",
     "new_run_id",
+    "preflight",
     "run_local",
 ]
 
@@ -137,6 +138,15 @@ def _px4_bin(test: UavTest, settings: EngineSettings, source: Path) -> Path | No
             allowed="the path of PX4's bin/px4 from a px4_sitl build",
         )
     return path
+
+
+def preflight(path: Path) -> UavTest:
+    """Read and check a test file as ``run_local`` does before flying; BadInput when it is wrong."""
+    from uavtest.spec.loaders import load_test
+
+    test = load_test(path)
+    _px4_bin(test, EngineSettings(), path)
+    return test
 
 
 def _last_line(path: Path, limit: int = 400) -> str:

@@ -1,7 +1,7 @@
 """Where artifacts live in a store: one layout for the local engine and the cluster.
 
 ``<namespace>/<test>/<run-id>/replica-<i>/{flight.ulg,trajectory.csv,result.json}`` and
-``<namespace>/<test>/<run-id>/aggregate/{summary.json,average.csv,trajectories.png}``.
+``<namespace>/<test>/<run-id>/aggregate/{summary.json,junit.xml,average.csv,trajectories.png}``.
 Local runs use namespace ``local``.
 """
 
@@ -14,6 +14,7 @@ from uavtest.errors import BadInput
 __all__ = [
     "AVERAGE",
     "FLIGHT_LOG",
+    "JUNIT",
     "LOCAL_NAMESPACE",
     "PLOT",
     "REPLICA_ARTIFACTS",
@@ -36,6 +37,7 @@ REPLICA_ARTIFACTS = (FLIGHT_LOG, TRAJECTORY, RESULT)
 SUMMARY = "summary.json"
 AVERAGE = "average.csv"
 PLOT = "trajectories.png"
+JUNIT = "junit.xml"  # the run as JUnit XML, for CI systems
 
 _SEGMENT = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]*$")
 

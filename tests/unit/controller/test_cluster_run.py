@@ -4,6 +4,7 @@ that happen before any cluster is touched)."""
 
 from __future__ import annotations
 
+import math
 import os
 import subprocess
 import sys
@@ -220,3 +221,23 @@ def test_out_without_s3_settings_exits_2_before_the_cluster_and_warns_of_ignored
     assert "ignored with --engine kubernetes: --jobs" in text
     assert "--out" in text and all(v in text for v in S3_VARIABLES)
     assert "no cluster" not in text  # refused before the (missing) cluster was asked anything
+
+
+def test_a_run_without_timeout_watches_a_minute_at_a_time() -> None:
+    from uavtest.controller.cluster_run import watch_seconds
+
+    assert watch_seconds(math.inf) == 60
+    assert watch_seconds(0.2) == 1
+    assert watch_seconds(12.5) == 13
+
+
+def test_junit_links_are_the_replicas_s3_uris_from_the_status() -> None:
+    from uavtest.controller.cluster_run import replica_links
+
+    status = {"runId": "r1", "artifacts": {"store": "s3://uavtest/pre/ns/t-x7k2f/r1/"}}
+    links = replica_links(status, "t-x7k2f", "ns", [0, 2])
+    assert links[2] == {
+        "flight.ulg": "s3://uavtest/pre/ns/t-x7k2f/r1/replica-2/flight.ulg",
+        "result.json": "s3://uavtest/pre/ns/t-x7k2f/r1/replica-2/result.json",
+    }
+    assert replica_links({"runId": "r1"}, "t", "ns", [0]) == {}

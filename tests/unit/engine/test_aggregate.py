@@ -96,3 +96,20 @@ def test_the_summary_names_params_the_builtin_simulator_ignores(tmp_path: Path) 
     assert summary.unmodelled_params == ["EKF2_GPS_DELAY"]
     stored = json.loads(store.get(aggregate_key(NS, TEST, RUN, "summary.json")))
     assert stored["unmodelled_params"] == ["EKF2_GPS_DELAY"]
+
+
+def test_the_aggregate_has_a_junit_report_linking_each_replicas_artifacts(tmp_path: Path) -> None:
+    import junitparser
+
+    store = LocalStore(tmp_path)
+    _put_replica(store, 0, Verdict.PASS)
+    _put_replica(store, 1, Verdict.FAIL)
+    aggregate_run(store, NS, TEST, RUN, [0, 1, 2], _spec())
+    doc = junitparser.JUnitXml.fromfile(str(store.path(aggregate_key(NS, TEST, RUN, "junit.xml"))))
+    (suite,) = list(doc)
+    assert (suite.name, suite.tests, suite.failures, suite.errors) == (TEST, 3, 1, 1)
+    cases = {c.name: c for c in suite}
+    assert f"flight.ulg: {store.path(replica_key(NS, TEST, RUN, 1, 'flight.ulg'))}" in (
+        cases["replica-1"].system_out or ""
+    )
+    assert {p.name: p.value for p in suite.properties()}["uavtest.seeds"] == "100..102"
