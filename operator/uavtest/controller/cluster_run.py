@@ -156,10 +156,12 @@ def _apply(custom: Any, namespace: str, manifest: dict[str, Any], *, dry_run: bo
         meta = dict(body["metadata"])
         token = None
         if spec_hash(existing.get("spec") or {}) == spec_hash(manifest.get("spec") or {}):
+            # the same flight: keep the stored spec (no new generation), ask for a re-run
             token = f"cli-{time.time_ns()}"
             meta["annotations"] = {**(meta.get("annotations") or {}), names.RERUN_ANNOTATION: token}
+        else:
+            body["spec"] = manifest["spec"]
         body["metadata"] = meta
-        body["spec"] = manifest["spec"]
         replaced = custom.replace_namespaced_custom_object(*args, name, body, **extra)
     except ApiException as e:
         if e.status in (400, 422):

@@ -60,9 +60,20 @@ RUN_SPEC_EXCLUDES = ("schedule", "successfulRunsHistoryLimit", "failedRunsHistor
 _NAME_HEAD = 52  # test names are at most 63; keep run names short and readable
 
 
+def _plain(value: Any) -> Any:
+    """JSON numbers as the API server hands them back: 120.0 and 120 are the same spec."""
+    if isinstance(value, float) and value.is_integer():
+        return int(value)
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_plain(v) for v in value]
+    return value
+
+
 def spec_hash(spec: Mapping[str, Any]) -> str:
     """A short hash of what a run flies: the spec without schedule and history limits."""
-    flown = {k: v for k, v in spec.items() if k not in RUN_SPEC_EXCLUDES}
+    flown = {k: _plain(v) for k, v in spec.items() if k not in RUN_SPEC_EXCLUDES}
     return hashlib.sha256(json.dumps(flown, sort_keys=True).encode()).hexdigest()[:16]
 
 

@@ -164,3 +164,11 @@ def test_the_test_summarises_its_runs_and_reads_like_kstatus() -> None:
     conds = {c.type: c.status.value for c in st.conditions}
     assert (conds["Ready"], conds["Reconciling"], conds["Stalled"]) == ("False", "False", "True")
     assert st.phase.value == "Failed"
+
+
+def test_the_spec_hash_reads_120_and_120_0_as_the_same_spec() -> None:
+    """The API server hands back 120.0 as 120: a re-applied unchanged test is not a new spec."""
+    assert spec_hash({"timeout": 120.0, "world": {"wind": [1.0, 2.5]}}) == spec_hash(
+        {"timeout": 120, "world": {"wind": [1, 2.5]}}
+    )
+    assert spec_hash({"timeout": 120}) != spec_hash({"timeout": 121})
