@@ -140,9 +140,21 @@ def run_schedule(body: kopf.Body, memo: kopf.Memo, logger: kopf.Logger, **_: Any
 
 
 @kopf.on.event(*_UAVTESTS)
-def forget_deleted(type: str, namespace: str, name: str, memo: kopf.Memo, **_: Any) -> None:
+def test_event(
+    type: str, body: kopf.Body, namespace: str, name: str, memo: kopf.Memo, logger: kopf.Logger, **_: Any
+) -> None:
+    rt = _rt(memo)
     if type == "DELETED":
-        _rt(memo).books.drop((namespace, f"{names.KIND}/{name}"))
+        rt.books.drop((namespace, f"{names.KIND}/{name}"))
+        return
+    # A new generation kopf sees no change in (the API server bumps it for 120 → 120.0): no run
+    # is due, but observedGeneration must follow, or kstatus reads the test InProgress forever.
+    status = body.get("status") or {}
+    if status.get("specHash") and status.get("observedGeneration") != body.get("metadata", {}).get(
+        "generation"
+    ):
+        with rt.metrics.reconcile_errors.labels(handler="test").count_exceptions():
+            testsync.ensure_runs(rt, body, logger)
 
 
 # ------------------------------------------------------------------------------------------- runs
