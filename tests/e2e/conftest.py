@@ -28,6 +28,7 @@ import secrets
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
@@ -46,6 +47,9 @@ from harness.cluster import (
     terminate_on_sigterm,
 )
 from harness.minio import MinioServer, start_minio
+
+if TYPE_CHECKING:
+    from e2e.operator_support import Operator
 
 
 def _ns_name(request: pytest.FixtureRequest) -> str:
@@ -131,3 +135,31 @@ def minio() -> Iterator[MinioServer]:
             yield server
         finally:
             server.stop()
+
+
+@pytest.fixture(scope="module")
+def bucket(request: pytest.FixtureRequest, minio: MinioServer) -> str:
+    """A new, empty bucket for the test module (``uavtest-<module>-<hex>``)."""
+    from e2e.operator_support import fresh_bucket
+
+    base = request.module.__name__.rsplit(".", 1)[-1].removeprefix("test_").replace("_", "-")
+    return fresh_bucket(minio, f"uavtest-{base[:40]}")
+
+
+@pytest.fixture(scope="module")
+def operator(
+    cluster: Cluster,
+    namespace: str,
+    minio: MinioServer,
+    runner_image: str,
+    bucket: str,
+    tmp_path_factory: pytest.TempPathFactory,
+) -> Iterator[Operator]:
+    """``uavtest operator`` (a host process) under the chart's RBAC, watching the module's namespace
+    and storing to its bucket; stopped after the module, its UavTests deleted first."""
+    from e2e.operator_support import running_operator
+
+    with running_operator(
+        cluster, namespace, minio, runner_image, bucket, tmp_path_factory.mktemp("operator")
+    ) as op:
+        yield op

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import signal
 import threading
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
@@ -13,8 +12,6 @@ import yaml
 from e2e.operator_support import (
     Operator,
     first_run,
-    fresh_bucket,
-    running_operator,
     store_keys,
     wait_complete,
 )
@@ -24,25 +21,6 @@ from harness.minio import MinioServer
 pytestmark = [pytest.mark.e2e, pytest.mark.slow]
 
 MINIO_OUTAGE_SECONDS = 30.0
-
-
-@pytest.fixture(scope="module")
-def bucket(minio: MinioServer) -> str:
-    return fresh_bucket(minio, "uavtest-faults")
-
-
-@pytest.fixture(scope="module")
-def operator(
-    cluster: Cluster,
-    namespace: str,
-    minio: MinioServer,
-    runner_image: str,
-    bucket: str,
-    tmp_path_factory: pytest.TempPathFactory,
-) -> Iterator[Operator]:
-    tmp = tmp_path_factory.mktemp("operator-faults")
-    with running_operator(cluster, namespace, minio, runner_image, bucket, tmp) as op:
-        yield op
 
 
 def hover(name: str, namespace: str, *, replicas: int, parallelism: int, hold: float = 10) -> dict[str, Any]:

@@ -15,14 +15,13 @@ import math
 import os
 import re
 import subprocess
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 from pyulog import ULog
 
-from e2e.operator_support import Operator, fresh_bucket, running_operator, store_keys, wait_complete
+from e2e.operator_support import Operator, store_keys, wait_complete
 from harness.cluster import CACHE_DIR, REPO_ROOT, Cluster
 from harness.minio import MinioServer
 
@@ -60,25 +59,6 @@ def px4_image(cluster: Cluster, px4_build: Path) -> str:
     assert done.returncode == 0, done.stderr[-3000:]
     cluster.import_image(archive)
     return PX4_IMAGE
-
-
-@pytest.fixture(scope="module")
-def bucket(minio: MinioServer) -> str:
-    return fresh_bucket(minio, "uavtest-px4")
-
-
-@pytest.fixture(scope="module")
-def operator(
-    cluster: Cluster,
-    namespace: str,
-    minio: MinioServer,
-    runner_image: str,
-    bucket: str,
-    tmp_path_factory: pytest.TempPathFactory,
-) -> Iterator[Operator]:
-    tmp = tmp_path_factory.mktemp("operator")
-    with running_operator(cluster, namespace, minio, runner_image, bucket, tmp) as op:
-        yield op
 
 
 def px4_hover(name: str, image: str) -> dict[str, Any]:

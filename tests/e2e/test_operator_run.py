@@ -21,8 +21,6 @@ from e2e.operator_support import (
     Operator,
     assert_no_root_credentials,
     first_run,
-    fresh_bucket,
-    running_operator,
     store_keys,
     wait_complete,
     wait_exists,
@@ -39,22 +37,10 @@ FORBIDDEN = re.compile(r"forbidden|\(403\)|'code': 403", re.IGNORECASE)
 
 
 @pytest.fixture(scope="module")
-def bucket(minio: MinioServer) -> str:
-    return fresh_bucket(minio, "uavtest-e2e")
-
-
-@pytest.fixture(scope="module")
-def operator(
-    cluster: Cluster,
-    namespace: str,
-    minio: MinioServer,
-    runner_image: str,
-    bucket: str,
-    tmp_path_factory: pytest.TempPathFactory,
-) -> Iterator[Operator]:
-    tmp = tmp_path_factory.mktemp("operator")
-    with running_operator(cluster, namespace, minio, runner_image, bucket, tmp) as op:
-        yield op
+def operator(operator: Operator) -> Iterator[Operator]:
+    """The conftest's operator, whose log must show no call the chart's RBAC refused."""
+    yield operator
+    op = operator
     # an HTTP 403 Forbidden answer (kopf: APIForbiddenError ... 'code': 403; kubernetes client:
     # "(403)" / "Reason: Forbidden"), not a "403" inside a timestamp such as "08:38:59,403"
     forbidden = [line for line in op.log_text().splitlines() if FORBIDDEN.search(line)]

@@ -11,14 +11,13 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 import yaml
 from pyulog import ULog
 
-from e2e.operator_support import Operator, fresh_bucket, running_operator
+from e2e.operator_support import Operator
 from harness.cluster import REPO_ROOT, Cluster
 from harness.minio import MinioServer
 from uavtest.analysis.models import ReplicaResult, RunSummary
@@ -26,26 +25,6 @@ from uavtest.analysis.models import ReplicaResult, RunSummary
 pytestmark = [pytest.mark.e2e, pytest.mark.slow]
 
 HOVER = REPO_ROOT / "examples" / "hover.yaml"
-
-
-@pytest.fixture(scope="module")
-def bucket(minio: MinioServer) -> str:
-    return fresh_bucket(minio, "uavtest-cli")
-
-
-@pytest.fixture(scope="module")
-def operator(
-    cluster: Cluster,
-    namespace: str,
-    minio: MinioServer,
-    runner_image: str,
-    bucket: str,
-    tmp_path_factory: pytest.TempPathFactory,
-) -> Iterator[Operator]:
-    with running_operator(
-        cluster, namespace, minio, runner_image, bucket, tmp_path_factory.mktemp("op")
-    ) as op:
-        yield op
 
 
 def run_cli(cluster: Cluster, minio: MinioServer, *args: str) -> subprocess.CompletedProcess[str]:
