@@ -71,6 +71,28 @@ class Box:
         v = -self.sin * dx + self.cos * dy
         return -self.hw <= v <= self.hw
 
+    def ray(self, x: float, y: float, z: float, dx: float, dy: float, dz: float) -> float:
+        """Distance along the unit direction (dx, dy, dz) from (x, y, z) (NED) to this box's
+        surface; ``inf`` if the ray misses it; 0 from inside. Slab method in the box's frame."""
+        px, py = x - self.cx, y - self.cy
+        c, s = self.cos, self.sin
+        origin = (c * px + s * py, -s * px + c * py, z - (self.z_top + self.z_bottom) / 2)
+        direction = (c * dx + s * dy, -s * dx + c * dy, dz)
+        half = (self.hl, self.hw, (self.z_bottom - self.z_top) / 2)
+        near, far = 0.0, math.inf
+        for o, d, h in zip(origin, direction, half, strict=True):
+            if abs(d) < 1e-12:
+                if o < -h or o > h:
+                    return math.inf
+                continue
+            t1, t2 = (-h - o) / d, (h - o) / d
+            if t1 > t2:
+                t1, t2 = t2, t1
+            near, far = max(near, t1), min(far, t2)
+            if near > far:
+                return math.inf
+        return near
+
 
 class World:
     """The boxes, with a cheap 'near' list refreshed at a low rate."""
@@ -87,6 +109,19 @@ class World:
             if b.contains(x, y, z):
                 return b
         return None
+
+    def ray(self, x: float, y: float, z: float, dx: float, dy: float, dz: float, max_range: float) -> float:
+        """Distance along the unit direction (dx, dy, dz) to the first box, ``inf`` if none is
+        within ``max_range`` (what a range sensor or depth camera pixel sees; the ground is not
+        an obstacle). Checks every box whose bounding circle is within reach."""
+        best = math.inf
+        for b in self.boxes:
+            if math.hypot(x - b.cx, y - b.cy) - b.radius > max_range:
+                continue
+            d = b.ray(x, y, z, dx, dy, dz)
+            if d < best:
+                best = d
+        return best if best <= max_range else math.inf
 
 
 class WindModel:

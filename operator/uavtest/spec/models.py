@@ -47,6 +47,7 @@ __all__ = [
     "API_VERSION",
     "KIND",
     "Assertions",
+    "Avoidance",
     "BoxPosition",
     "BoxSize",
     "Command",
@@ -109,6 +110,14 @@ class Simulator(StrEnum):
     PX4 = "px4"
 
 
+class Avoidance(StrEnum):
+    """What keeps the vehicle off obstacles, besides the pilot or the plan."""
+
+    NONE = "none"  # PX4 v1.15 defaults: nothing; a box on the path is a collision
+    COLLISION_PREVENTION = "collision-prevention"  # PX4's CP_* in position mode, fed by a range sensor
+    LOCAL_PLANNER = "local-planner"  # PX4-Avoidance's local planner (COM_OBS_AVOID 1), the competition's SUT
+
+
 #: PX4 parameters are INT32 or FLOAT; a float must be finite
 ParamValue = ParamInt | ParamFloat
 
@@ -121,6 +130,14 @@ class Vehicle(Model):
     )
     params_file: str | None = Field(
         None, description="PX4 params CSV (NAME, value); relative to the test file; inlined by render"
+    )
+    avoidance: Avoidance = Field(
+        Avoidance.NONE,
+        description=(
+            "none; collision-prevention (PX4 Collision Prevention in position mode, a simulated "
+            "range sensor); local-planner (PX4-Avoidance's local planner in missions, as the UAV "
+            "Testing Competition flies)"
+        ),
     )
     speed_factor: SpeedFactor | None = Field(
         None,

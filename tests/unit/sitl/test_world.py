@@ -2,10 +2,11 @@ import math
 import random
 
 import numpy as np
+import pytest
 
 from uavtest.analysis.geometry import collides
 from uavtest.sitl.geo import Projection
-from uavtest.sitl.simulator_sih import Box
+from uavtest.sitl.simulator_sih import Box, World
 from uavtest.spec.geo import geodetic_to_ned, ned_to_geodetic
 from uavtest.spec.models import BoxPosition, BoxSize, Obstacle
 
@@ -35,3 +36,19 @@ def test_projection_matches_the_spec_geo_module():
         n, e = proj.project(lat, lon)
         ref = geodetic_to_ned(lat, lon, 47.397742, 8.545594)
         assert np.allclose((n, e), ref, atol=1e-6) and np.allclose((n, e), (north, east), atol=1e-6)
+
+
+def test_a_ray_reaches_the_near_face_of_a_box_and_misses_above_it() -> None:
+    box = Obstacle.model_validate({"size": {"l": 2, "w": 4, "h": 10}, "position": {"x": 10, "y": 0, "z": 0}})
+    world = World([box])
+    assert world.ray(0, 0, -5, 1, 0, 0, 50) == pytest.approx(9.0)  # the face at x = 9
+    assert world.ray(0, 0, -15, 1, 0, 0, 50) == math.inf  # 15 m up, the box is 10 m tall
+    assert world.ray(0, 0, -5, 0, 1, 0, 50) == math.inf  # looking East, past it
+    assert world.ray(0, 0, -5, 1, 0, 0, 5) == math.inf  # beyond the sensor's range
+    assert world.ray(10, 0, -5, 1, 0, 0, 50) == 0.0  # from inside
+
+
+def test_a_ray_sees_a_yawed_box_where_its_corner_is() -> None:
+    # a 2 x 2 box turned 45 degrees: its corner points at the origin, sqrt(2) closer than its centre
+    box = Obstacle.model_validate({"size": {"l": 2, "w": 2, "h": 5}, "position": {"x": 10, "y": 0, "r": 45}})
+    assert World([box]).ray(0, 0, -1, 1, 0, 0, 50) == pytest.approx(10 - math.sqrt(2))
