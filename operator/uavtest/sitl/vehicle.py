@@ -54,7 +54,7 @@ from uavtest.sitl.simulation import Simulation
 from uavtest.sitl.simulator_sih import Body, WindModel, World
 from uavtest.sitl.telemetry import MODES, ONBOARD, Schedule
 from uavtest.sitl.ulog_writer import LOG_LEVEL
-from uavtest.spec.models import Home, Obstacle, UavTestSpec, Wind
+from uavtest.spec.models import Avoidance, Home, Obstacle, UavTestSpec, Wind
 
 __all__ = ["STEP_US", "SimConfig", "Vehicle"]
 
@@ -88,6 +88,8 @@ class SimConfig:
     wind: Wind = field(default_factory=Wind)
     params: Mapping[str, int | float] = field(default_factory=dict)
     seed: int = 0
+    #: what keeps the vehicle off obstacles (``vehicle.avoidance``)
+    avoidance: Avoidance = Avoidance.NONE
     #: the host clock (Unix µs) at boot, for SYSTEM_TIME; 0 (1970) keeps a run independent of the date
     utc_boot_us: int = 0
     #: the MAVLink links (name, telemetry mode of ``telemetry.MODES``), each with its own schedule
@@ -103,6 +105,7 @@ class SimConfig:
             wind=spec.world.wind,
             params=dict(spec.vehicle.params if params is None else params),
             seed=seed,
+            avoidance=spec.vehicle.avoidance,
         )
 
 
