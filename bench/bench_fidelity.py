@@ -137,7 +137,9 @@ def table(name: str, px4: list[FlightFigures], ours: list[FlightFigures]) -> tup
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--seeds", type=int, default=25)
     parser.add_argument("--plans", default="mission1,mission2,square")
     args = parser.parse_args()
@@ -158,7 +160,9 @@ def main() -> None:
         console.print(t)
         per = statistics.mean(f.flight_time for f in ours)
         console.print(f"  {args.seeds} built-in flights in {wall:.1f} s wall ({per:.0f} s flight each)\n")
-    console.print("every built-in-vs-PX4 mean inside PX4's run-to-run range" if all_ok else "[red]not all inside[/red]")
+    console.print(
+        "every built-in-vs-PX4 mean inside PX4's run-to-run range" if all_ok else "[red]not all inside[/red]"
+    )
     sys.exit(0 if all_ok else 1)
 
 
