@@ -186,27 +186,28 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
     "params_and_commands": params_and_commands,
 }
 
-#: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
+#: (ulog sha256, messages sha256) per scenario; re-recorded for issue 10's PX4-like flight (smooth
+#: EKF2-like estimator error, FlightTaskAuto heading lock inside NAV_ACC_RAD, move-to-land altitude).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "2ac4d8b77a4a49b7677b4a08c1eb40d12c073cf5ba6d9930289b805a18d6e8da",
-        "beb8e0ede2a16c1093324a0c39357b1d5ee42daa22ff814584fe8e60fb76a1b1",
+        "4d13f84f55997c0ea69d723c057677ad9bbfc0685f1bf7533f3342590253ea60",
+        "0b9abc5eaab4d6202c69e3129c77baa0248b15fd34acd028d810323fb1a8530b",
     ),
     "manual_and_rtl": (
-        "f5496a48854a53a5b716412b1e3bfc6c7285b93d73a17106b89adc28fa2c6f12",
-        "d3f42d35da3db1c05a074d11376f6bed32b8409df6644abdd00305178405cfcf",
+        "6d02f28d1a7b12eb0e61158f6645d8e0db3329f9f42351e8b4dbeba93f8dac9c",
+        "c27fe59442b7d67f3c89e17dcfa56dad42fcbb3ff1dcd1d7813c974305364c6d",
     ),
     "datalink_loss": (
-        "50e987d3e1a3111d47f308e7dca2522e7305790d8db2351c7e670f2006af1433",
-        "382d82a89cacd76c9a59f81d18274c09e03a7043b1ab2a767292b88365fbf028",
+        "b154f3e67df6ad4a1666540415574ed523adfd96a7626f564de609bf426aebfa",
+        "9fca5a2c8029a328adf83633b0d1b2d73e61d6c4f7af9fd3e6eacb1db8406ee6",
     ),
     "crash": (
-        "c99d991cb1e78000ed9c68dfe0546f83dca7d6d9f7bcc8bb3b0278c97eeb7797",
-        "e14d716a5563d41314127c1edfdbcc613b784a3efd9790739850a0b86a69c1e3",
+        "01a921617bcb59aa97d776c52ae03cd6d24e510ed1a5a8e1ae5d706471652cb3",
+        "9a91c05b7a0afb75c8e51608e88e88c7d4f22e43289ca5680a5351443ec0603e",
     ),
     "params_and_commands": (
-        "4347434072360a02ea39884141f1d1dea22308372980a9bb9a7c1f98edbd4bd3",
-        "46db39636054d617abc624742e6700fd1ad435a3a6c0199366567808501bcbee",
+        "a33bea38cf3322b2f3bd4afcc1eb39edc8bccbaccf2b3d78708450279d8a2824",
+        "6dcb8a116d3f897c434f7d22568cb987e2686d844c5f2c91787241527334fc34",
     ),
 }
 
