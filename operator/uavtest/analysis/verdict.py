@@ -9,6 +9,10 @@ flies has an empty trajectory (the vehicle never took off) the replica is ``fail
 saying so (with the vehicle's refusal when there was one), and the assertions that need a flight
 — noCollision, minObstacleDistance, geofence, similarity — are reported "not judged" instead of
 passing by default. A test that by design does not fly (ground commands only) is judged as before.
+
+With obstacles, the metrics also carry the UAV Testing Competition's 2-D distance and points
+(``uavtest.analysis.competition``; they never change the verdict), and the reason names a failed
+noCollision a "hard fail" and a failed minObstacleDistance a "soft fail", in the competition's words.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from uavtest.analysis.competition import FAIL_KIND, competition_distance, competition_points
 from uavtest.analysis.geometry import distances_to_obstacles
 from uavtest.analysis.mission import acceptance_radius, mission_targets, progress_from_waypoints
 from uavtest.analysis.models import AssertionResult, FlightMetrics, MissionProgress, Verdict
@@ -177,6 +182,8 @@ def judge_flight(
         d = distances_to_obstacles(trajectory.x, trajectory.y, trajectory.z, obstacles, radius=vehicle_radius)
         metrics.min_obstacle_distance = float(d.min())
         metrics.collision = bool(d.min() <= 0.0)
+        metrics.min_obstacle_distance_2d = competition_distance(trajectory, obstacles)
+        metrics.competition_points = competition_points(metrics.min_obstacle_distance_2d)
     if crash is not None:
         metrics.collision = True
     if obstacles and assertions.no_collision and unjudged and crash is None:
@@ -306,7 +313,7 @@ def judge_flight(
             )
 
     failed = [r for r in results if not r.passed]
-    reasons = [r.message for r in failed]
+    reasons = [f"{FAIL_KIND[r.name]}: {r.message}" if r.name in FAIL_KIND else r.message for r in failed]
     if unjudged:
         reasons.insert(0, NEVER_TOOK_OFF + (f": {refusal}" if refusal else ""))
     verdict = Verdict.FAIL if reasons else Verdict.PASS
