@@ -66,7 +66,7 @@ def results_table(summary: RunSummary) -> Table:
         ("replica", "right"),
         ("seed", "right"),
         ("verdict", "left"),
-        ("min distance (3-D)", "right"),
+        ("3-D distance", "right"),
         ("2-D distance", "right"),
         ("points", "right"),
         ("flight time", "right"),
