@@ -308,6 +308,8 @@ def _final_status(
                 seed=max(r.seed, 0),
                 verdict=ReplicaVerdict(r.verdict.value),
                 min_distance=r.metrics.min_obstacle_distance if r.metrics else None,
+                min_distance_2d=r.metrics.min_obstacle_distance_2d if r.metrics else None,
+                points=r.metrics.competition_points if r.metrics else None,
                 reason=reason_text[:256],
             )
         )
