@@ -16,7 +16,8 @@ uavtest user gets the same numbers:
   < 0.25 m, 2 if < 1 m, 1 if < 1.5 m, else 0 (every bound strict). The competition averages a
   test's points over its runs (5 of them).
 - **hard fail**: a collision with an obstacle; **soft fail**: the vehicle did not keep the safe
-  distance (the competition's is 1.5 m). The verdict's reason names them (``FAIL_KIND``).
+  distance (the competition's is 1.5 m). The failed assertions' messages, and so the verdict's
+  reason, start with these names (``HARD_FAIL``, ``SOFT_FAIL``).
 
 uavtest measures in its own frame: the flight from takeoff to landing, relative to PX4's home.
 Aerialist takes the whole log relative to its first sample; in Gazebo the vehicle boots at rest at
@@ -34,10 +35,11 @@ from uavtest.analysis.trajectory import Trajectory
 from uavtest.spec.models import Obstacle
 
 __all__ = [
-    "FAIL_KIND",
     "HALF_WIDTH",
+    "HARD_FAIL",
     "POINTS",
     "SAMPLE_PERIOD",
+    "SOFT_FAIL",
     "SOFT_FAIL_DISTANCE",
     "competition_distance",
     "competition_points",
@@ -49,8 +51,8 @@ HALF_WIDTH = 0.125  # m: half Aerialist's VEHICLE_WIDTH (0.25 m), the line's buf
 #: (distance below which, points), first match wins; 0 points otherwise
 POINTS: tuple[tuple[float, int], ...] = ((0.25, 5), (1.0, 2), (1.5, 1))
 SOFT_FAIL_DISTANCE = 1.5  # m: the competition's minimum safe distance
-#: the competition's names for the obstacle assertions that failed
-FAIL_KIND = {"noCollision": "hard fail", "minObstacleDistance": "soft fail"}
+HARD_FAIL = "hard fail"  # the competition's name for a collision (a failed noCollision)
+SOFT_FAIL = "soft fail"  # ... for a safe distance not kept (a failed minObstacleDistance)
 
 
 def window_means(trajectory: Trajectory, period: float = SAMPLE_PERIOD) -> np.ndarray:

@@ -11,8 +11,8 @@ saying so (with the vehicle's refusal when there was one), and the assertions th
 passing by default. A test that by design does not fly (ground commands only) is judged as before.
 
 With obstacles, the metrics also carry the UAV Testing Competition's 2-D distance and points
-(``uavtest.analysis.competition``; they never change the verdict), and the reason names a failed
-noCollision a "hard fail" and a failed minObstacleDistance a "soft fail", in the competition's words.
+(``uavtest.analysis.competition``; they never change the verdict), and a failed noCollision reads
+"hard fail: ...", a failed minObstacleDistance "soft fail: ...", in the competition's words.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from uavtest.analysis.competition import FAIL_KIND, competition_distance, competition_points
+from uavtest.analysis.competition import HARD_FAIL, SOFT_FAIL, competition_distance, competition_points
 from uavtest.analysis.geometry import distances_to_obstacles
 from uavtest.analysis.mission import acceptance_radius, mission_targets, progress_from_waypoints
 from uavtest.analysis.models import AssertionResult, FlightMetrics, MissionProgress, Verdict
@@ -202,7 +202,7 @@ def judge_flight(
                 passed=not hit,
                 value=metrics.min_obstacle_distance,
                 limit=0.0,
-                message=f"collision with an obstacle{where}" if hit else "no collision",
+                message=f"{HARD_FAIL}: collision with an obstacle{where}" if hit else "no collision",
             )
         )
     if obstacles and assertions.min_obstacle_distance is not None and unjudged:
@@ -212,11 +212,10 @@ def judge_flight(
         dist = metrics.min_obstacle_distance
         assert dist is not None
         ok = dist >= limit
-        msg = (
-            f"min distance {_fmt(dist)} m >= {_fmt(limit)} m"
-            if ok
-            else f"min distance {_fmt(dist)} m < {_fmt(limit)} m (short by {_fmt(limit - dist)} m)"
+        short = (
+            f"{SOFT_FAIL}: min distance {_fmt(dist)} m < {_fmt(limit)} m (short by {_fmt(limit - dist)} m)"
         )
+        msg = f"min distance {_fmt(dist)} m >= {_fmt(limit)} m" if ok else short
         results.append(
             AssertionResult(name="minObstacleDistance", passed=ok, value=dist, limit=limit, message=msg)
         )
@@ -313,7 +312,7 @@ def judge_flight(
             )
 
     failed = [r for r in results if not r.passed]
-    reasons = [f"{FAIL_KIND[r.name]}: {r.message}" if r.name in FAIL_KIND else r.message for r in failed]
+    reasons = [r.message for r in failed]
     if unjudged:
         reasons.insert(0, NEVER_TOOK_OFF + (f": {refusal}" if refusal else ""))
     verdict = Verdict.FAIL if reasons else Verdict.PASS

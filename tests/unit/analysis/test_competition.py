@@ -266,3 +266,16 @@ def test_the_score_totals_and_averages_points_and_counts_hard_and_soft_fails() -
     assert (score.total, score.mean, score.count) == (8, 2.0, 4)
     assert (score.hard_fails, score.soft_fails) == (1, 2)
     assert competition_score([FlightMetrics()]) is None
+
+
+def test_assertions_not_judged_are_no_hard_or_soft_fail() -> None:
+    empty = Trajectory([], [], [], [])
+    metrics, _, verdict, reason = judge_flight(empty, Assertions(), obstacles=[BOX], expect_flight=True)
+    assert verdict.value == "fail" and "not judged" in reason
+    assert "hard fail" not in reason and "soft fail" not in reason
+    assert metrics.competition_points is None
+    # a crash the log reports is a hard fail even without a trajectory near the box
+    _, _, _, reason = judge_flight(
+        flight(8.0, alt=2.0), Assertions(mission_completed=False), obstacles=[BOX], crash="crash: collided"
+    )
+    assert reason.startswith("hard fail: collision with an obstacle: the log reports 'crash: collided'")
