@@ -101,6 +101,10 @@ def test_example_flies_in_parallel_pods_and_reports(
         minio.client().get_object(bucket, f"{namespace}/{name}/{run}/aggregate/summary.json").read()
     )
     assert summary["passed"] == 3
+    # the competition's outcomes: each replica's 2-D distance and points, the run's total
+    assert all(r["points"] in (0, 1, 2, 5) and r["minDistance2D"] >= 0 for r in status["results"])
+    assert summary["competition_points"]["count"] == 3
+    assert summary["competition_points"]["total"] == sum(r["points"] for r in status["results"])
     assert status["artifacts"]["summary"] == f"s3://{bucket}/{namespace}/{name}/{run}/aggregate/summary.json"
     # the replicas wrote with the run's upload policy only: no copy of the store's keys in the namespace
     secrets = assert_no_root_credentials(cluster, namespace, minio)

@@ -43,7 +43,7 @@ def test_parallel_replicas_write_the_store_layout(repo_root: Path, tmp_path: Pat
 def test_table_and_summary_are_printed(repo_root: Path, tmp_path: Path) -> None:
     out = uavtest_run(repo_root / "examples/hover.yaml", tmp_path, "--replicas", "1", json_out=False)
     assert out.code == 0, out.stderr[-3000:]
-    for heading in ("replica", "seed", "verdict", "min distance", "flight time", "reason"):
+    for heading in ("replica", "seed", "verdict", "3-D", "2-D", "points", "flight", "reason"):
         assert heading in out.stdout
     assert "1 passed · 0 failed · 0 error · flakiness 0.00 · flaky no" in out.stdout
     run = run_dir(tmp_path, "hover")

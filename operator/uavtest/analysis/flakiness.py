@@ -13,9 +13,10 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from uavtest.analysis.models import ReplicaResult, RunSummary, Stats, Verdict
+from uavtest.analysis.competition import SOFT_FAIL_DISTANCE
+from uavtest.analysis.models import CompetitionScore, FlightMetrics, ReplicaResult, RunSummary, Stats, Verdict
 
-__all__ = ["flakiness", "stats", "summarize"]
+__all__ = ["competition_score", "flakiness", "stats", "summarize"]
 
 
 def flakiness(passed: int, failed: int) -> float | None:
@@ -31,6 +32,27 @@ def stats(values: Iterable[float | None]) -> Stats | None:
     if not arr.size:
         return None
     return Stats(min=float(arr.min()), mean=float(arr.mean()), max=float(arr.max()), count=int(arr.size))
+
+
+def competition_score(metrics: Iterable[FlightMetrics]) -> CompetitionScore | None:
+    """Total and mean competition points over the flights that have them, with their hard fails
+    (collision) and soft fails (no collision, 2-D distance below 1.5 m); None when none has points."""
+    scored = [m for m in metrics if m.competition_points is not None]
+    if not scored:
+        return None
+    total = sum(m.competition_points or 0 for m in scored)
+    return CompetitionScore(
+        total=total,
+        mean=total / len(scored),
+        count=len(scored),
+        hard_fails=sum(m.collision for m in scored),
+        soft_fails=sum(
+            not m.collision
+            and m.min_obstacle_distance_2d is not None
+            and m.min_obstacle_distance_2d < SOFT_FAIL_DISTANCE
+            for m in scored
+        ),
+    )
 
 
 def summarize(results: Sequence[ReplicaResult], *, test: str, namespace: str, run_id: str) -> RunSummary:
@@ -59,6 +81,8 @@ def summarize(results: Sequence[ReplicaResult], *, test: str, namespace: str, ru
         flaky=f is not None and 0.0 < f < 1.0,
         verdict=verdict,
         min_obstacle_distance=stats(r.metrics.min_obstacle_distance for r in valid if r.metrics),
+        min_obstacle_distance_2d=stats(r.metrics.min_obstacle_distance_2d for r in valid if r.metrics),
+        competition_points=competition_score(r.metrics for r in valid if r.metrics),
         flight_time=stats(r.metrics.flight_time for r in valid if r.metrics),
         warnings=list(dict.fromkeys(w for r in ordered for w in r.warnings)),
         results=list(ordered),

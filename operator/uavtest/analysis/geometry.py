@@ -13,6 +13,11 @@ the distance here is Euclidean in 3-D: 12 m above a 10 m tall box is 2 m away.
 
 ``radius`` (default 0: the vehicle is a point) is subtracted from every distance, floored at 0;
 a collision is a distance of 0 — the point (or the vehicle's sphere) is inside or touching a box.
+
+``line_distances_2d`` is the other measure, the one Aerialist and the UAV Testing Competition
+use: in the (x, y) plane only, from the polyline through the samples to each box's footprint
+(heights ignored, so flying over a box is a distance of 0). ``uavtest.analysis.competition``
+applies it the way they do.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ __all__ = [
     "box_corners",
     "collides",
     "distances_to_obstacles",
+    "line_distances_2d",
     "min_distance_to_obstacles",
     "obstacle_arrays",
 ]
@@ -91,6 +97,58 @@ def collides(
 ) -> bool:
     """True when any point is inside or touching an obstacle (distance 0 after ``radius``)."""
     return bool(obstacles) and min_distance_to_obstacles(x, y, z, obstacles, radius=radius) <= 0.0
+
+
+def line_distances_2d(x: ArrayLike, y: ArrayLike, obstacles: Sequence[Obstacle]) -> np.ndarray:
+    """Per obstacle, the 2-D distance (metres) from the polyline through the points (x, y) to the
+    obstacle's footprint (its yawed l × w rectangle); 0 where the line enters or crosses it.
+
+    Heights are ignored. One point is a degenerate line (its distance to each footprint). Shape
+    (m,) for m obstacles; empty without obstacles, ``inf`` per obstacle without points.
+    Vectorized over segments and boxes: a segment that misses a rectangle is nearest to it at one
+    of its two ends or at one of the four corners (both shapes are convex).
+    """
+    px = np.atleast_1d(np.asarray(x, dtype=np.float64))
+    py = np.atleast_1d(np.asarray(y, dtype=np.float64))
+    if not obstacles:
+        return np.zeros(0)
+    if not px.size:
+        return np.full(len(obstacles), np.inf)
+    boxes = obstacle_arrays(obstacles)
+    cx, cy, _ = boxes["centre"].T  # (m,)
+    half = boxes["half"][:, :2]  # (m, 2): l/2 along u, w/2 along v
+    cos, sin = np.cos(boxes["yaw"]), np.sin(boxes["yaw"])
+    dx = px[:, None] - cx[None, :]  # (n, m)
+    dy = py[:, None] - cy[None, :]
+    p = np.stack((cos * dx + sin * dy, -sin * dx + cos * dy), axis=-1)  # (n, m, 2) in each box's frame
+    outside = np.maximum(np.abs(p) - half, 0.0)
+    point = np.sqrt((outside**2).sum(axis=-1))  # (n, m): each point to each footprint
+    if len(px) == 1:
+        return point[0]
+    a, d = p[:-1], p[1:] - p[:-1]  # segments a + t d, t in [0, 1]: (n-1, m, 2)
+    # does the segment enter the rectangle? (Liang–Barsky clipping on both axes)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t1 = (-half - a) / d
+        t2 = (half - a) / d
+    moving = d != 0.0
+    lo = np.where(moving, np.minimum(t1, t2), -np.inf)
+    hi = np.where(moving, np.maximum(t1, t2), np.inf)
+    still_inside = moving | (np.abs(a) <= half)
+    enter = np.maximum(lo.max(axis=-1), 0.0)
+    leave = np.minimum(hi.min(axis=-1), 1.0)
+    hits = still_inside.all(axis=-1) & (enter <= leave)  # (n-1, m)
+    # otherwise: the nearer of its ends and the footprint's corners nearest to it
+    signs = np.array([[1.0, 1.0], [1.0, -1.0], [-1.0, -1.0], [-1.0, 1.0]])
+    corners = half[:, None, :] * signs[None, :, :]  # (m, 4, 2)
+    dd = (d * d).sum(axis=-1)  # (n-1, m)
+    rel = corners[None, :, :, :] - a[:, :, None, :]  # (n-1, m, 4, 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(dd[..., None] > 0, (rel * d[:, :, None, :]).sum(axis=-1) / dd[..., None], 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    gap = rel - t[..., None] * d[:, :, None, :]
+    corner = np.sqrt((gap**2).sum(axis=-1)).min(axis=-1)  # (n-1, m)
+    segment = np.minimum(np.minimum(point[:-1], point[1:]), corner)
+    return np.where(hits, 0.0, segment).min(axis=0)
 
 
 def box_corners(obstacle: Obstacle) -> np.ndarray:

@@ -11,7 +11,11 @@ One ``<testsuite>`` per run, one ``<testcase>`` per replica:
   Jenkins/Ant JUnit schema allows properties only on a suite.
 - Suite ``<properties>``: ``uavtest.test``, ``uavtest.namespace``, ``uavtest.run-id``,
   ``uavtest.verdict``, ``uavtest.replicas``, ``uavtest.flakiness`` (``n/a`` when no replica was
-  valid), ``uavtest.flaky``, ``uavtest.seeds`` (the replicas' seeds, e.g. ``7..9``).
+  valid), ``uavtest.flaky``, ``uavtest.seeds`` (the replicas' seeds, e.g. ``7..9``); with
+  obstacles, the UAV Testing Competition's score: ``uavtest.competition.points`` (total),
+  ``uavtest.competition.points-mean``, ``uavtest.competition.hard-fails``,
+  ``uavtest.competition.soft-fails``. A case's ``<system-out>`` also names its distances (3-D
+  and the competition's 2-D) and points when it has them.
 
 Case names are ``replica-<i>`` and the class name is the test's name, so a CI's history of a
 case survives new seeds and run ids. Written with the standard library's ``xml.etree``: the
@@ -79,6 +83,13 @@ def _case(classname: str, result: ReplicaResult, links: Mapping[str, str]) -> ET
         lines.append(f"reason: {result.reason}")
     if result.attempts > 1:
         lines.append(f"attempts: {result.attempts}")
+    m = result.metrics
+    if m is not None and m.min_obstacle_distance is not None:
+        lines.append(f"min obstacle distance: {m.min_obstacle_distance:.3f} m (3-D)")
+    if m is not None and m.min_obstacle_distance_2d is not None:
+        lines.append(f"competition distance: {m.min_obstacle_distance_2d:.3f} m (2-D)")
+    if m is not None and m.competition_points is not None:
+        lines.append(f"competition points: {m.competition_points}")
     lines += [f"{name}: {where}" for name, where in links.items()]
     ET.SubElement(case, "system-out").text = _clean("\n".join(lines))
     return case
@@ -117,6 +128,12 @@ def run_suite(summary: RunSummary, links: ArtifactLinks | None = None) -> ET.Ele
         "uavtest.flaky": "true" if summary.flaky else "false",
         "uavtest.seeds": seeds_text([r.seed for r in results]),
     }
+    score = summary.competition_points
+    if score is not None:
+        properties["uavtest.competition.points"] = str(score.total)
+        properties["uavtest.competition.points-mean"] = f"{score.mean:.4g}"
+        properties["uavtest.competition.hard-fails"] = str(score.hard_fails)
+        properties["uavtest.competition.soft-fails"] = str(score.soft_fails)
     if len(results) < summary.replicas:
         properties["uavtest.results-omitted"] = str(summary.replicas - len(results))
     _properties(suite, properties)

@@ -12,6 +12,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 __all__ = [
     "AssertionResult",
+    "CompetitionScore",
     "FlightMetrics",
     "InjectedFault",
     "MissionProgress",
@@ -60,6 +61,15 @@ class FlightMetrics(_Result):
 
     flight_time: float | None = Field(None, description="seconds, takeoff to landing / end of log")
     min_obstacle_distance: float | None = Field(None, description="metres, 3-D; None without obstacles")
+    min_obstacle_distance_2d: float | None = Field(
+        None,
+        description="metres in the (x, y) plane, as the UAV Testing Competition and Aerialist measure it "
+        "(flying over a box is 0); None without obstacles",
+    )
+    competition_points: int | None = Field(
+        None,
+        description="the competition's points from the 2-D distance: 5 (< 0.25 m), 2 (< 1 m), 1 (< 1.5 m), 0",
+    )
     collision: bool = False
     mission_completed: bool | None = None
     waypoints_reached: int | None = None
@@ -118,6 +128,16 @@ class Stats(_Result):
     count: int = Field(ge=1)
 
 
+class CompetitionScore(_Result):
+    """The UAV Testing Competition's view of a run: its points over the valid replicas that have them."""
+
+    total: int = Field(ge=0, description="points summed over the replicas")
+    mean: float = Field(ge=0, description="points per replica (the competition scores a test by this mean)")
+    count: int = Field(ge=1, description="replicas scored (valid, with obstacles and a flight)")
+    hard_fails: int = Field(ge=0, description="scored replicas that collided with an obstacle")
+    soft_fails: int = Field(ge=0, description="scored replicas without collision, 2-D distance < 1.5 m")
+
+
 class RunSummary(_Result):
     """A run's outcome over its replicas: ``aggregate/summary.json``."""
 
@@ -132,6 +152,8 @@ class RunSummary(_Result):
     flaky: bool = Field(description="valid replicas both passed and failed (0 < flakiness < 1)")
     verdict: Verdict = Field(description="pass: all valid passed; fail: any failed; error: only errors")
     min_obstacle_distance: Stats | None = None
+    min_obstacle_distance_2d: Stats | None = Field(None, description="the competition's 2-D distance, metres")
+    competition_points: CompetitionScore | None = None
     flight_time: Stats | None = None
     warnings: list[str] = Field(default_factory=list, description="the replicas' warnings, each once")
     results: list[ReplicaResult] = Field(default_factory=list)

@@ -168,10 +168,14 @@ def render_table(report: LogReport, console: Console) -> None:
     table.add_row("flight time", flight)
     table.add_row("max altitude", _num(m.max_altitude, "m"))
     table.add_row(
-        "min obstacle distance",
+        "min obstacle distance (3-D)",
         _num(m.min_obstacle_distance, "m")
         + ("" if m.min_obstacle_distance is not None else " (no obstacles)"),
     )
+    if m.min_obstacle_distance_2d is not None:
+        table.add_row("2-D distance (competition)", _num(m.min_obstacle_distance_2d, "m"))
+    if m.competition_points is not None:
+        table.add_row("competition points", f"{m.competition_points} (5: < 0.25 m, 2: < 1 m, 1: < 1.5 m)")
     table.add_row("collision", "yes" if m.collision else "no")
     if m.waypoints_total is not None:
         done = "completed" if m.mission_completed else "not completed"

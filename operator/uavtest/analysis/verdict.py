@@ -9,6 +9,10 @@ flies has an empty trajectory (the vehicle never took off) the replica is ``fail
 saying so (with the vehicle's refusal when there was one), and the assertions that need a flight
 — noCollision, minObstacleDistance, geofence, similarity — are reported "not judged" instead of
 passing by default. A test that by design does not fly (ground commands only) is judged as before.
+
+With obstacles, the metrics also carry the UAV Testing Competition's 2-D distance and points
+(``uavtest.analysis.competition``; they never change the verdict), and a failed noCollision reads
+"hard fail: ...", a failed minObstacleDistance "soft fail: ...", in the competition's words.
 """
 
 from __future__ import annotations
@@ -17,6 +21,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from uavtest.analysis.competition import HARD_FAIL, SOFT_FAIL, competition_distance, competition_points
 from uavtest.analysis.geometry import distances_to_obstacles
 from uavtest.analysis.mission import acceptance_radius, mission_targets, progress_from_waypoints
 from uavtest.analysis.models import AssertionResult, FlightMetrics, MissionProgress, Verdict
@@ -177,6 +182,8 @@ def judge_flight(
         d = distances_to_obstacles(trajectory.x, trajectory.y, trajectory.z, obstacles, radius=vehicle_radius)
         metrics.min_obstacle_distance = float(d.min())
         metrics.collision = bool(d.min() <= 0.0)
+        metrics.min_obstacle_distance_2d = competition_distance(trajectory, obstacles)
+        metrics.competition_points = competition_points(metrics.min_obstacle_distance_2d)
     if crash is not None:
         metrics.collision = True
     if obstacles and assertions.no_collision and unjudged and crash is None:
@@ -195,7 +202,7 @@ def judge_flight(
                 passed=not hit,
                 value=metrics.min_obstacle_distance,
                 limit=0.0,
-                message=f"collision with an obstacle{where}" if hit else "no collision",
+                message=f"{HARD_FAIL}: collision with an obstacle{where}" if hit else "no collision",
             )
         )
     if obstacles and assertions.min_obstacle_distance is not None and unjudged:
@@ -205,11 +212,10 @@ def judge_flight(
         dist = metrics.min_obstacle_distance
         assert dist is not None
         ok = dist >= limit
-        msg = (
-            f"min distance {_fmt(dist)} m >= {_fmt(limit)} m"
-            if ok
-            else f"min distance {_fmt(dist)} m < {_fmt(limit)} m (short by {_fmt(limit - dist)} m)"
+        short = (
+            f"{SOFT_FAIL}: min distance {_fmt(dist)} m < {_fmt(limit)} m (short by {_fmt(limit - dist)} m)"
         )
+        msg = f"min distance {_fmt(dist)} m >= {_fmt(limit)} m" if ok else short
         results.append(
             AssertionResult(name="minObstacleDistance", passed=ok, value=dist, limit=limit, message=msg)
         )

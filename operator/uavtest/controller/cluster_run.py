@@ -102,18 +102,26 @@ def results_table(name: str, status: Mapping[str, Any]) -> Table:
         ("replica", "right"),
         ("seed", "right"),
         ("verdict", "left"),
-        ("min distance", "right"),
+        ("3-D distance", "right"),
+        ("2-D distance", "right"),
+        ("points", "right"),
     ):
         table.add_column(col, justify=justify)  # type: ignore[arg-type]
     table.add_column("reason", overflow="fold")
     style = {"pass": "green", "fail": "red", "error": "yellow"}
+
+    def metres(value: float | None) -> str:
+        return "-" if value is None else f"{value:.2f} m"
+
     for r in sorted(status.get("results") or [], key=lambda r: r["index"]):
-        dist = r.get("minDistance")
+        points = r.get("points")
         table.add_row(
             str(r["index"]),
             str(r["seed"]),
             f"[{style.get(r['verdict'], '')}]{r['verdict']}[/]",
-            "-" if dist is None else f"{dist:.2f} m",
+            metres(r.get("minDistance")),
+            metres(r.get("minDistance2D")),
+            "-" if points is None else str(points),
             r.get("reason", ""),
         )
     return table
@@ -287,7 +295,7 @@ def still_running_message(name: str, namespace: str, status: Mapping[str, Any], 
 def summary_from_status(name: str, namespace: str, status: Mapping[str, Any]) -> RunSummary:
     """The local engine's ``--json`` shape (``RunSummary``) from what a final status holds.
 
-    The status keeps each replica's index, seed, verdict, reason and minimum distance (at most
+    The status keeps each replica's index, seed, verdict, reason, distances and points (at most
     ``MAX_STATUS_RESULTS`` of them; the counters always cover every replica); flight times and the
     unmodelled parameters are only in ``summary.json`` in the store.
     """
@@ -299,7 +307,11 @@ def summary_from_status(name: str, namespace: str, status: Mapping[str, Any]) ->
             reason=str(r.get("reason") or ""),
             metrics=None
             if r.get("minDistance") is None
-            else FlightMetrics(min_obstacle_distance=float(r["minDistance"])),
+            else FlightMetrics(
+                min_obstacle_distance=float(r["minDistance"]),
+                min_obstacle_distance_2d=r.get("minDistance2D"),
+                competition_points=r.get("points"),
+            ),
         )
         for r in status.get("results") or []
     ]
@@ -307,7 +319,7 @@ def summary_from_status(name: str, namespace: str, status: Mapping[str, Any]) ->
     counts = {k: int(status.get(k) or 0) for k in ("replicas", "passed", "failed", "errors")}
     update: dict[str, Any] = {**counts, "warnings": list(status.get("warnings") or [])}
     if int(status.get("resultsOmitted") or 0):  # stats over a part of the replicas would mislead
-        update["min_obstacle_distance"] = None
+        update.update(min_obstacle_distance=None, min_obstacle_distance_2d=None, competition_points=None)
     update["flakiness"] = status.get("flakiness")
     update["flaky"] = bool(status.get("flaky"))
     if counts["failed"]:

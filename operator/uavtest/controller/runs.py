@@ -34,14 +34,13 @@ from typing import Any
 from pydantic import ValidationError
 
 from uavtest.controller import names
-from uavtest.controller.status import is_final, kstatus_conditions
+from uavtest.controller.status import is_final, kstatus_conditions, run_counts, run_status
 from uavtest.controller.views import RunView, TestView
 from uavtest.spec.status import (
     ConditionReason,
     LastRun,
     Phase,
     TestStatus,
-    UavTestStatus,
 )
 
 __all__ = [
@@ -190,13 +189,6 @@ def build_run(test_body: Mapping[str, Any], planned: PlannedRun) -> dict[str, An
     return run
 
 
-def _run_status(run: RunView) -> UavTestStatus:
-    try:
-        return UavTestStatus.model_validate(run.status)
-    except ValidationError:
-        return UavTestStatus()
-
-
 def _newest_first(runs: Iterable[RunView]) -> list[RunView]:
     return sorted(runs, key=lambda r: (r.created, r.name), reverse=True)
 
@@ -217,16 +209,12 @@ def runs_to_delete(test: TestView, runs: Iterable[RunView]) -> list[str]:
 
 
 def _last_run(run: RunView) -> LastRun:
-    st = _run_status(run)
+    st = run_status(run)
     return LastRun(
         name=run.name,
         phase=st.phase,
         trigger=run.trigger,
-        passed=st.passed,
-        failed=st.failed,
-        errors=st.errors,
-        flakiness=st.flakiness,
-        flaky=st.flaky,
+        **run_counts(st),
         completion_time=st.completion_time,
         summary=st.artifacts.summary,
     )
@@ -245,7 +233,7 @@ def test_status_from(test: TestView, runs: Sequence[RunView], *, now: datetime |
         previous = TestStatus()
     ordered = _newest_first(runs)
     finished = [r for r in ordered if is_final(r.status)]
-    statuses = {r.name: _run_status(r) for r in ordered}
+    statuses = {r.name: run_status(r) for r in ordered}
     succeeded = sum(1 for r in finished if statuses[r.name].phase == Phase.SUCCEEDED)
     flaky = sum(1 for r in finished if statuses[r.name].flaky)
     last = _last_run(ordered[0]) if ordered else previous.last_run

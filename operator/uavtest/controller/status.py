@@ -24,7 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from datetime import UTC, datetime
-from typing import Any
+from typing import Any, Protocol
 
 from pydantic import ValidationError
 
@@ -52,6 +52,8 @@ __all__ = [
     "is_final",
     "kstatus_conditions",
     "phase_of",
+    "run_counts",
+    "run_status",
     "set_condition",
     "status_from",
 ]
@@ -165,11 +167,32 @@ def phase_of(summary: RunSummary) -> tuple[Phase, str]:
     return Phase.ERROR, Reason.BENCH_ERRORS
 
 
-def _previous(test: RunView) -> UavTestStatus:
+def run_status(run: RunView) -> UavTestStatus:
+    """The run's ``.status`` as the model; an empty status when it has none or it is unreadable."""
     try:
-        return UavTestStatus.model_validate(test.status)
+        return UavTestStatus.model_validate(run.status)
     except ValidationError:
         return UavTestStatus()
+
+
+class _Counts(Protocol):
+    passed: int
+    failed: int
+    errors: int
+    flakiness: float | None
+    flaky: bool
+
+
+def run_counts(outcome: _Counts) -> dict[str, Any]:
+    """A run's counters (passed, failed, errors, flakiness, flaky) from its summary or status, as
+    keyword arguments for the status models that repeat them (``UavTestStatus``, ``LastRun``)."""
+    return {
+        "passed": outcome.passed,
+        "failed": outcome.failed,
+        "errors": outcome.errors,
+        "flakiness": outcome.flakiness,
+        "flaky": outcome.flaky,
+    }
 
 
 def _parse_time(text: str | None) -> datetime | None:
@@ -285,6 +308,8 @@ def _final_status(
                 seed=max(r.seed, 0),
                 verdict=ReplicaVerdict(r.verdict.value),
                 min_distance=r.metrics.min_obstacle_distance if r.metrics else None,
+                min_distance_2d=r.metrics.min_obstacle_distance_2d if r.metrics else None,
+                points=r.metrics.competition_points if r.metrics else None,
                 reason=reason_text[:256],
             )
         )
@@ -294,11 +319,7 @@ def _final_status(
         replicas=summary.replicas,
         pending=0,
         running=0,
-        passed=summary.passed,
-        failed=summary.failed,
-        errors=summary.errors,
-        flakiness=summary.flakiness,
-        flaky=summary.flaky,
+        **run_counts(summary),
         run_id=test.run_id,
         start_time=_parse_time(job.start_time if job else None) or previous.start_time,
         completion_time=previous.completion_time or now,
@@ -330,7 +351,7 @@ def status_from(
     A final status (Complete True) is returned unchanged unless a summary is given.
     """
     now = now or datetime.now(UTC)
-    previous = _previous(test)
+    previous = run_status(test)
     progress = progress_of(test.replicas, job, pods, job_deleted=job_deleted)
     if summary is not None:
         return _final_status(test, progress, previous, job, summary, store_url=store_url, now=now)

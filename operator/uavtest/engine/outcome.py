@@ -37,6 +37,10 @@ def _seconds(v: float | None) -> str:
     return "-" if v is None else f"{v:.1f} s"
 
 
+def _points(v: int | None) -> str:
+    return "-" if v is None else str(v)
+
+
 def _row(r: ReplicaResult) -> list[str]:
     m = r.metrics
     verdict = f"[{_STYLE[r.verdict]}]{r.verdict.value}[/]"
@@ -47,19 +51,24 @@ def _row(r: ReplicaResult) -> list[str]:
         str(r.seed),
         verdict,
         _metres(m.min_obstacle_distance if m else None),
+        _metres(m.min_obstacle_distance_2d if m else None),
+        _points(m.competition_points if m else None),
         _seconds(m.flight_time if m else None),
         r.reason,
     ]
 
 
 def results_table(summary: RunSummary) -> Table:
-    """One row per replica: replica, seed, verdict, min distance, flight time, reason."""
+    """One row per replica: replica, seed, verdict, min distance (3-D), the competition's 2-D
+    distance and points, flight time, reason."""
     table = Table(title=f"{summary.test} · run {summary.run_id}", title_justify="left")
     for name, justify in (
         ("replica", "right"),
         ("seed", "right"),
         ("verdict", "left"),
-        ("min distance", "right"),
+        ("3-D distance", "right"),
+        ("2-D distance", "right"),
+        ("points", "right"),
         ("flight time", "right"),
         ("reason", "left"),
     ):
@@ -73,13 +82,25 @@ def _stats(name: str, s: Stats | None, unit: str) -> str:
     return "" if s is None else f" · {name} {s.min:.2f}/{s.mean:.2f}/{s.max:.2f} {unit} (min/mean/max)"
 
 
+def _score(summary: RunSummary) -> str:
+    s = summary.competition_points
+    if s is None:
+        return ""
+    return (
+        f" · competition points {s.total} ({s.mean:.2f} per replica over {s.count}; "
+        f"{s.hard_fails} hard fail, {s.soft_fails} soft fail)"
+    )
+
+
 def summary_line(summary: RunSummary) -> str:
-    """passed, failed, error, flakiness, flaky yes/no (and min distance stats when known)."""
+    """passed, failed, error, flakiness, flaky yes/no (and min distance stats and the
+    competition's points when known)."""
     flakiness = "n/a" if summary.flakiness is None else f"{summary.flakiness:.2f}"
     return (
         f"{summary.passed} passed · {summary.failed} failed · {summary.errors} error · "
         f"flakiness {flakiness} · flaky {'yes' if summary.flaky else 'no'}"
         + _stats("min distance", summary.min_obstacle_distance, "m")
+        + _score(summary)
     )
 
 

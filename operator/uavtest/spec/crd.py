@@ -261,6 +261,15 @@ def _run_spec_schema() -> dict[str, Any]:
     }
 
 
+#: the last printer column of every kind, as kubectl shows it for built-in ones
+_AGE = {"name": "Age", "type": "date", "jsonPath": ".metadata.creationTimestamp"}
+
+
+def _condition_status(type_: ConditionType) -> str:
+    """The JSONPath of a condition's status: printer columns select by type, never by position."""
+    return f'.status.conditions[?(@.type=="{type_.value}")].status'
+
+
 def _crd_doc(
     kind: str, plural: str, singular: str, short: str, columns: list[dict[str, Any]], schema: dict[str, Any]
 ) -> dict[str, Any]:
@@ -288,7 +297,7 @@ def _crd_doc(
                     "served": True,
                     "storage": True,
                     "subresources": {"status": {}},
-                    "additionalPrinterColumns": columns,
+                    "additionalPrinterColumns": [*columns, _AGE],
                     "schema": {"openAPIV3Schema": schema},
                 }
             ],
@@ -296,9 +305,24 @@ def _crd_doc(
     }
 
 
+def _object_schema(description: str, spec: dict[str, Any], status: dict[str, Any]) -> dict[str, Any]:
+    """The openAPIV3Schema of a custom resource: its ``spec`` (required) and ``status`` schemas."""
+    return {
+        "type": "object",
+        "description": description,
+        "properties": {
+            "apiVersion": {"type": "string"},
+            "kind": {"type": "string"},
+            "metadata": {"type": "object"},
+            "spec": spec,
+            "status": status,
+        },
+        "required": ["spec"],
+    }
+
+
 def crd() -> dict[str, Any]:
     """The CustomResourceDefinition (apiextensions.k8s.io/v1) of UavTest, as a plain dict."""
-    ready = f'.status.conditions[?(@.type=="{ConditionType.READY.value}")].status'
     columns = [
         {
             "name": "Phase",
@@ -321,27 +345,23 @@ def crd() -> dict[str, Any]:
             "description": "flaky runs / finished runs among the kept runs",
         },
         {"name": "Schedule", "type": "string", "jsonPath": ".spec.schedule", "priority": 1},
-        {"name": "Ready", "type": "string", "jsonPath": ready, "priority": 1},
-        {"name": "Age", "type": "date", "jsonPath": ".metadata.creationTimestamp"},
-    ]
-    schema = {
-        "type": "object",
-        "description": "A system-level UAV test; each run of it (N replicas in simulation) is a UavTestRun.",
-        "properties": {
-            "apiVersion": {"type": "string"},
-            "kind": {"type": "string"},
-            "metadata": {"type": "object"},
-            "spec": _spec_schema(),
-            "status": _model_schema(TestStatus),
+        {
+            "name": "Ready",
+            "type": "string",
+            "jsonPath": _condition_status(ConditionType.READY),
+            "priority": 1,
         },
-        "required": ["spec"],
-    }
+    ]
+    schema = _object_schema(
+        "A system-level UAV test; each run of it (N replicas in simulation) is a UavTestRun.",
+        _spec_schema(),
+        _model_schema(TestStatus),
+    )
     return _crd_doc(KIND, PLURAL, SINGULAR, SHORT_NAME, columns, schema)
 
 
 def run_crd() -> dict[str, Any]:
     """The CustomResourceDefinition of UavTestRun: one run of a UavTest."""
-    succeeded = f'.status.conditions[?(@.type=="{ConditionType.SUCCEEDED.value}")].status'
     columns = [
         {"name": "Test", "type": "string", "jsonPath": ".spec.testName"},
         {"name": "Trigger", "type": "string", "jsonPath": ".spec.trigger", "priority": 1},
@@ -359,24 +379,16 @@ def run_crd() -> dict[str, Any]:
         {
             "name": "Succeeded",
             "type": "string",
-            "jsonPath": succeeded,
+            "jsonPath": _condition_status(ConditionType.SUCCEEDED),
             "priority": 1,
             "description": "the Succeeded condition",
         },
-        {"name": "Age", "type": "date", "jsonPath": ".metadata.creationTimestamp"},
     ]
-    schema = {
-        "type": "object",
-        "description": "One run of a UavTest: N replicas flown in simulation, their verdicts and flakiness.",
-        "properties": {
-            "apiVersion": {"type": "string"},
-            "kind": {"type": "string"},
-            "metadata": {"type": "object"},
-            "spec": _run_spec_schema(),
-            "status": _model_schema(UavTestStatus),
-        },
-        "required": ["spec"],
-    }
+    schema = _object_schema(
+        "One run of a UavTest: N replicas flown in simulation, their verdicts and flakiness.",
+        _run_spec_schema(),
+        _model_schema(UavTestStatus),
+    )
     return _crd_doc(RUN_KIND, RUN_PLURAL, RUN_SINGULAR, RUN_SHORT_NAME, columns, schema)
 
 

@@ -120,6 +120,12 @@ class ReplicaStatus(Model):
         description="pass, fail (an assertion did not hold) or error (the bench failed)"
     )
     min_distance: float | None = Field(None, description="smallest 3-D distance to an obstacle, metres")
+    min_distance_2d: float | None = Field(
+        None, description="the UAV Testing Competition's 2-D distance to the obstacles, metres"
+    )
+    points: int | None = Field(
+        None, ge=0, le=5, description="the competition's points: 5 (< 0.25 m), 2 (< 1 m), 1 (< 1.5 m), 0"
+    )
     reason: str = Field(
         "", max_length=MAX_REASON_LENGTH, description="why it failed or errored; empty on pass"
     )

@@ -123,3 +123,32 @@ def test_characters_xml_cannot_hold_do_not_break_the_report(tmp_path: Path) -> N
 )
 def test_seeds_are_a_range_when_consecutive(seeds: list[int], text: str) -> None:
     assert seeds_text(seeds) == text
+
+
+def test_a_run_with_obstacles_carries_the_competition_score(tmp_path: Path) -> None:
+    from uavtest.analysis.models import FlightMetrics
+
+    def scored(i: int, d3: float, d2: float, points: int, collision: bool = False) -> ReplicaResult:
+        metrics = FlightMetrics(
+            min_obstacle_distance=d3,
+            min_obstacle_distance_2d=d2,
+            competition_points=points,
+            collision=collision,
+        )
+        verdict = Verdict.PASS if d3 >= 1.5 else Verdict.FAIL
+        return _result(i, verdict, "" if verdict is Verdict.PASS else "soft fail: ...", metrics=metrics)
+
+    results = [scored(0, 0.0, 0.0, 5, collision=True), scored(1, 0.9, 0.78, 2), scored(2, 2.0, 1.9, 0)]
+    summary = summarize(results, test="narrow-gap", namespace="local", run_id="r")
+    (suite,) = list(_read(junit_document([run_suite(summary)]), tmp_path))
+    props = {p.name: p.value for p in suite.properties()}
+    assert props["uavtest.competition.points"] == "7"
+    assert props["uavtest.competition.points-mean"] == "2.333"
+    assert (props["uavtest.competition.hard-fails"], props["uavtest.competition.soft-fails"]) == ("1", "1")
+    out = {c.name: c.system_out or "" for c in suite}
+    assert "min obstacle distance: 0.900 m (3-D)" in out["replica-1"]
+    assert "competition distance: 0.780 m (2-D)" in out["replica-1"]
+    assert "competition points: 2" in out["replica-1"]
+    # without obstacles there is no score
+    (plain,) = list(_read(junit_document([run_suite(_summary())]), tmp_path))
+    assert not any(p.name.startswith("uavtest.competition") for p in plain.properties())

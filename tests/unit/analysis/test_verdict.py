@@ -51,7 +51,8 @@ def test_flying_over_a_box_is_no_collision_but_too_close() -> None:
     assert metrics.min_obstacle_distance == pytest.approx(1.0)
     assert checks["noCollision"].passed
     assert not checks["minObstacleDistance"].passed
-    assert checks["minObstacleDistance"].message == "min distance 1.00 m < 1.50 m (short by 0.50 m)"
+    message = checks["minObstacleDistance"].message
+    assert message == "soft fail: min distance 1.00 m < 1.50 m (short by 0.50 m)"
     assert verdict == Verdict.FAIL
 
 

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from rich.console import Console
 
 from uavtest.analysis.flakiness import summarize
 from uavtest.analysis.models import FlightMetrics, ReplicaResult, RunSummary, Verdict
@@ -25,6 +26,7 @@ from uavtest.controller.cluster_run import (
     apply_overrides,
     exit_code_for,
     progress_text,
+    results_table,
     still_running_message,
     summary_from_status,
     with_download,
@@ -119,6 +121,28 @@ def test_the_json_verdict_follows_the_counters_when_results_are_omitted() -> Non
     summary = summary_from_status("hover-x7k2p", "team-a", status)
     assert (summary.replicas, summary.passed, summary.errors) == (60, 58, 2)
     assert summary.verdict == Verdict.PASS and summary.min_obstacle_distance is None
+
+
+def test_the_status_carries_the_competition_outcomes_to_the_table_and_the_json() -> None:
+    def scored(i: int, d3: float, d2: float, points: int) -> ReplicaResult:
+        metrics = FlightMetrics(
+            min_obstacle_distance=d3, min_obstacle_distance_2d=d2, competition_points=points
+        )
+        return ReplicaResult(index=i, seed=i, verdict=Verdict.FAIL, reason="soft fail: ...", metrics=metrics)
+
+    summary = summarize(
+        [scored(0, 0.9, 0.78, 2), scored(1, 1.3, 1.21, 1)], test="gap", namespace="a", run_id="r"
+    )
+    test = run_view(uavtest_body(replicas=2))
+    status = status_from(test, None, [], store_url="s3://b", summary=summary).dump()
+    assert status["results"][0]["minDistance2D"] == 0.78 and status["results"][0]["points"] == 2
+    console = Console(width=160, record=True, color_system=None)
+    console.print(results_table("gap", status))
+    row = next(line for line in console.export_text().splitlines() if "0.78 m" in line)
+    assert "0.90 m" in row and " 2 " in row
+    back = summary_from_status("gap", "a", status)
+    assert back.competition_points is not None
+    assert (back.competition_points.total, back.competition_points.soft_fails) == (3, 2)
 
 
 def test_replicas_and_seed_override_the_spec_and_name_the_option_when_wrong() -> None:

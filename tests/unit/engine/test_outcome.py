@@ -60,3 +60,33 @@ def test_the_run_output_warns_about_unmodelled_params() -> None:
     assert unmodelled_line(summary) == (
         "warning: 1 PX4 parameter set by the test has no effect in the built-in simulator: EKF2_GPS_DELAY"
     )
+
+
+def test_table_and_summary_line_show_the_competition_points() -> None:
+    def scored(i: int, d2: float, points: int, collision: bool = False) -> ReplicaResult:
+        metrics = FlightMetrics(
+            flight_time=40.0,
+            min_obstacle_distance=d2 + 0.1,
+            min_obstacle_distance_2d=d2,
+            competition_points=points,
+            collision=collision,
+        )
+        return ReplicaResult(index=i, seed=i, verdict=Verdict.FAIL, reason="soft fail: ...", metrics=metrics)
+
+    summary = summarize(
+        [scored(0, 0.1, 5, collision=True), scored(1, 1.23, 1), _r(2, Verdict.ERROR, "boom")],
+        test="gap",
+        namespace="local",
+        run_id="r",
+    )
+    console = Console(width=200, record=True, color_system=None)
+    console.print(results_table(summary))
+    text = console.export_text()
+    assert "2-D distance" in text and "points" in text
+    row = next(line for line in text.splitlines() if "1.23 m" in line)
+    assert "1.33 m" in row and " 1 " in row  # 3-D, 2-D and its 1 point on the replica's row
+    line = summary_line(summary)
+    assert "competition points 6 (3.00 per replica over 2; 1 hard fail, 1 soft fail)" in line
+    assert "competition" not in summary_line(
+        summarize([_r(0, Verdict.PASS)], test="t", namespace="l", run_id="r")
+    )

@@ -234,7 +234,13 @@ def test_status_dump_satisfies_the_schema(validator: Any) -> None:
         ],
         results=[
             ReplicaStatus(
-                index=1, seed=8, verdict="fail", min_distance=0.8, reason="min distance 0.80 m < 1.5 m"
+                index=1,
+                seed=8,
+                verdict="fail",
+                min_distance=0.8,
+                min_distance_2d=0.7,
+                points=2,
+                reason="soft fail: min distance 0.80 m < 1.50 m",
             )
         ],
     )
