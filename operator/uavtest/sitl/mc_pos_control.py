@@ -20,6 +20,7 @@ What gives PX4 its flight times, modelled after PX4 v1.15's ``mc_pos_control`` a
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
 
@@ -148,6 +149,11 @@ class Controller:
         self.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self.ramp = 0.0  # seconds into the takeoff ramp
         self.of_ramp = 1e9  # seconds into an offboard takeoff (the vehicle restarts it while landed)
+        #: Collision Prevention in position mode (FlightTaskManualPosition): (stick velocity NED,
+        #: velocity, yaw) -> allowed velocity setpoint; None when PX4 would not run it
+        self.velocity_constraint: (
+            Callable[[float, float, float, float, float], tuple[float, float]] | None
+        ) = None
 
     def reset(self, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float) -> None:
         """Restart the reference at the vehicle's state (mode switch, arming)."""
@@ -386,8 +392,11 @@ class Controller:
         # position mode: sticks are a body-frame velocity
         bvx, bvy = sx * lim.vel_manual, sy * lim.vel_manual
         self.stretch = 1.0
-        self._accelerate(dt, c * bvx - s * bvy, s * bvx + c * bvy)
-        if sx == 0.0 and sy == 0.0:
+        wx, wy = c * bvx - s * bvy, s * bvx + c * bvy
+        if self.velocity_constraint is not None:
+            wx, wy = self.velocity_constraint(wx, wy, vx, vy, yaw)
+        self._accelerate(dt, wx, wy)
+        if wx == 0.0 and wy == 0.0:  # centred sticks, or CP's zero: brake and hold (_updateXYlock)
             self.px += self.vx * dt
             self.py += self.vy * dt
         else:

@@ -189,24 +189,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "2ac4d8b77a4a49b7677b4a08c1eb40d12c073cf5ba6d9930289b805a18d6e8da",
+        "8b23df1ec60250a821453a4e6a7b8afc48180d2e1b8e0f9fed867c93d410b36c",
         "beb8e0ede2a16c1093324a0c39357b1d5ee42daa22ff814584fe8e60fb76a1b1",
     ),
     "manual_and_rtl": (
-        "f5496a48854a53a5b716412b1e3bfc6c7285b93d73a17106b89adc28fa2c6f12",
+        "4d763aec748f8510a6feaa3a1a60c66f99746739383b00c34c1d1c883206caf4",
         "d3f42d35da3db1c05a074d11376f6bed32b8409df6644abdd00305178405cfcf",
     ),
     "datalink_loss": (
-        "50e987d3e1a3111d47f308e7dca2522e7305790d8db2351c7e670f2006af1433",
+        "7925b8ba81b4f1b952cac3e1031e73edb38b05063da9ccdfc7df3f0794a66d53",
         "382d82a89cacd76c9a59f81d18274c09e03a7043b1ab2a767292b88365fbf028",
     ),
     "crash": (
-        "c99d991cb1e78000ed9c68dfe0546f83dca7d6d9f7bcc8bb3b0278c97eeb7797",
+        "06858a73a5dfd8eb09bb27f154952e069db16681b5f3867699698a57d1dd63af",
         "e14d716a5563d41314127c1edfdbcc613b784a3efd9790739850a0b86a69c1e3",
     ),
     "params_and_commands": (
-        "4347434072360a02ea39884141f1d1dea22308372980a9bb9a7c1f98edbd4bd3",
-        "46db39636054d617abc624742e6700fd1ad435a3a6c0199366567808501bcbee",
+        "6ab93053c4ea107aa712771c56695f6460e6b6ca3e97d2d1ad4702b085ba571e",
+        "f3f42bfb6ba6835b97efad99af0c0e1a641dcfa5371f97f49f2ab780b562e97b",
     ),
 }
 
