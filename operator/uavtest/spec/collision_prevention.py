@@ -26,13 +26,14 @@ def collision_prevention_warnings(spec: UavTestSpec) -> list[str]:
     cp_dist, pos_mode = _param(spec, "CP_DIST"), int(_param(spec, "MPC_POS_MODE"))
     wanted = v.avoidance is Avoidance.COLLISION_PREVENTION
     out: list[str] = []
+    runs = cp_dist > 0 and pos_mode == 0
     if v.simulator is Simulator.PX4:
-        if wanted or v.range_sensor is not None:
+        if wanted or v.range_sensor is not None or runs:
             out.append(
-                "PX4 SITL (SIH, v1.15) has no obstacle-distance sensor: vehicle.avoidance "
-                "collision-prevention and vehicle.rangeSensor are built-in simulator only; PX4's "
+                "PX4 SITL (SIH, v1.15) has no obstacle-distance sensor (vehicle.avoidance "
+                "collision-prevention and vehicle.rangeSensor are built-in simulator only): PX4's "
                 "Collision Prevention gets no data"
-                + (" and holds the vehicle still in position mode" if cp_dist > 0 and pos_mode == 0 else "")
+                + (": position mode will not move and switches to Hold after 5 s" if runs else "")
             )
         return out
     if wanted and cp_dist <= 0:
