@@ -97,6 +97,10 @@ class ObstacleMap:
         )  # fmt: skip
 
 
+_BIN_COS = tuple(math.cos(math.radians(i * MAP_INCREMENT_DEG)) for i in range(MAP_BINS))
+_BIN_SIN = tuple(math.sin(math.radians(i * MAP_INCREMENT_DEG)) for i in range(MAP_BINS))
+
+
 def _wrap_360(deg: float) -> float:
     return deg % 360.0
 
@@ -221,29 +225,42 @@ def constrain_setpoint(
         sp_index = new_index
     fov_bins = 0
     d = m.distances
+    stamps, ranges = m.data_timestamps, m.data_maxranges
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    stale_before = now_us - RANGE_STREAM_TIMEOUT_US
+    min_cm = m.min_distance
+    xy_p, delay = p.xy_p, p.delay
+    b_jerk = 4.0 * p.acc_hor * p.acc_hor / p.jerk_max  # computeMaxSpeedFromDistance's b
+    two_acc = 2.0 * p.acc_hor
     for i in range(MAP_BINS):
-        age = now_us - m.data_timestamps[i]
-        if age > RANGE_STREAM_TIMEOUT_US:
+        if stamps[i] < stale_before:
             d[i] = UINT16_MAX
-        a = yaw + math.radians(i * MAP_INCREMENT_DEG)
-        bx, by = math.cos(a), math.sin(a)
-        if d[i] < UINT16_MAX:
-            fov_bins += 1
-        if m.min_distance < d[i] < UINT16_MAX:
-            if dir_x * bx + dir_y * by > 0.0:
-                distance = d[i] * 0.01
-                v_par = max(0.0, vel[0] * bx + vel[1] * by)
-                delay_distance = v_par * p.delay
-                if distance < m.data_maxranges[i] * 0.01:
-                    delay_distance += v_par * age * 1e-6
-                stop = max(0.0, distance - keep - delay_distance)
-                limit = min(p.xy_p * stop, max_speed_from_distance(p.jerk_max, p.acc_hor, stop))
-                projection = bx * dir_x + by * dir_y
-                vel_max_bin = limit / projection if projection > 0.01 else vel_max
-                if vel_max_bin >= 0.0:
-                    vel_max = min(vel_max, vel_max_bin)
-        elif d[i] == UINT16_MAX and i == sp_index and (not p.go_no_data or m.data_fov[i]):
-            vel_max = 0.0
+        di = d[i]
+        if di == UINT16_MAX:
+            if i == sp_index and (not p.go_no_data or m.data_fov[i]):
+                vel_max = 0.0
+            continue
+        fov_bins += 1
+        if di <= min_cm:
+            continue
+        c, s_ = _BIN_COS[i], _BIN_SIN[i]
+        bx, by = cy * c - sy * s_, sy * c + cy * s_  # the bin's direction, local frame
+        projection = dir_x * bx + dir_y * by
+        if projection <= 0.0:
+            continue
+        distance = di * 0.01
+        v_par = vel[0] * bx + vel[1] * by
+        v_par = v_par if v_par > 0.0 else 0.0
+        delay_distance = v_par * delay
+        if distance < ranges[i] * 0.01:
+            delay_distance += v_par * (now_us - stamps[i]) * 1e-6
+        stop = distance - keep - delay_distance
+        stop = stop if stop > 0.0 else 0.0
+        smooth = 0.5 * (-b_jerk + math.sqrt(b_jerk * b_jerk + 4.0 * two_acc * stop))
+        limit = xy_p * stop if xy_p * stop < smooth else smooth
+        vel_max_bin = limit / projection if projection > 0.01 else vel_max
+        if 0.0 <= vel_max_bin < vel_max:
+            vel_max = vel_max_bin
     if fov_bins == 0:
         vel_max = 0.0
     return dir_x * vel_max, dir_y * vel_max

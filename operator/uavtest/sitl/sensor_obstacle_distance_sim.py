@@ -12,8 +12,9 @@ this stands in for the sensors PX4's Collision Prevention is fed by: a lidar dri
   no obstacle); an obstacle nearer than ``min_range`` is reported as measured (PX4's CP then
   ignores the bin, as it does for a real sensor);
 - each bin is the nearest of three rays across it (its centre and +-1/3 of its width), cast
-  horizontally from the vehicle's position with ``World.ray``: the scan plane stays level
-  (a gimballed scanner; a body-fixed one would tilt with the vehicle), the ground is not seen.
+  horizontally from the vehicle's position against the boxes (``Box.ray``, what ``World.ray``
+  casts; only rays that can reach a box are cast): the scan plane stays level (a gimballed
+  scanner; a body-fixed one would tilt with the vehicle), the ground is not seen.
 
 It also publishes one ``distance_sensor`` (forward facing, the front bin's reading, one bin's
 width of field of view), as a PX4 lidar driver publishes its current reading beside the scan.
@@ -46,7 +47,6 @@ MAV_DISTANCE_SENSOR_LASER = 0
 ROTATION_FORWARD_FACING = 0
 #: DRV_DIST_DEVTYPE_SIM (0x9A) on the simulation bus (DeviceBusType_SIMULATION = 4), as SIH's
 DEVICE_ID = (0x9A << 16) | 4
-_RAYS = (-INCREMENT_DEG / 3.0, 0.0, INCREMENT_DEG / 3.0)
 
 
 def _in_fov(k: int, fov_deg: float) -> bool:
@@ -57,20 +57,47 @@ def _in_fov(k: int, fov_deg: float) -> bool:
 
 
 def scan(world: World, x: float, y: float, z: float, yaw: float, sensor: RangeSensor) -> tuple[int, ...]:
-    """The 72 distances (cm) of a scan from (x, y, z) (NED) with heading ``yaw`` (rad)."""
-    max_cm = round(sensor.max_range * 100)
+    """The 72 distances (cm) of a scan from (x, y, z) (NED) with heading ``yaw`` (rad).
+
+    What ``World.ray`` sees along each ray, computed box by box: only the boxes the level scan
+    plane cuts and within reach, and of their rays only those inside the sector the box's
+    bounding circle subtends (the others cannot hit it).
+    """
+    max_range = sensor.max_range
+    max_cm = round(max_range * 100)
+    best = [math.inf] * BINS
+    fov = sensor.fov
+    for box in world.boxes:
+        if not box.z_top <= z <= box.z_bottom:
+            continue  # the scan plane passes above (or below) it
+        dx, dy = box.cx - x, box.cy - y
+        centre = math.hypot(dx, dy)
+        if centre - box.radius > max_range:
+            continue
+        if centre <= box.radius:
+            first, last = 0, BINS * 3 - 1  # around (or inside) it: every ray may hit
+        else:
+            bearing = math.degrees(math.atan2(dy, dx) - yaw)
+            half = math.degrees(math.asin(box.radius / centre))
+            step = INCREMENT_DEG / 3.0  # the rays are 1/3 bin apart
+            first = math.floor((bearing - half) / step) - 1
+            last = math.ceil((bearing + half) / step) + 1
+        for r in range(first, last + 1):
+            k = ((r + 1) // 3) % BINS  # ray r: bin (r + 1) // 3, offset (r + 1) % 3 - 1 thirds
+            if best[k] == 0.0:
+                continue
+            a = yaw + math.radians(r * INCREMENT_DEG / 3.0)
+            d = box.ray(x, y, z, math.cos(a), math.sin(a), 0.0)
+            if d < best[k]:
+                best[k] = d
     out = []
     for k in range(BINS):
-        if not _in_fov(k, sensor.fov):
+        if not _in_fov(k, fov):
             out.append(UINT16_MAX)
-            continue
-        best = math.inf
-        for d in _RAYS:
-            a = yaw + math.radians(k * INCREMENT_DEG + d)
-            r = world.ray(x, y, z, math.cos(a), math.sin(a), 0.0, sensor.max_range)
-            if r < best:
-                best = r
-        out.append(max_cm + 1 if best == math.inf else min(round(best * 100), max_cm))
+        elif best[k] > max_range:
+            out.append(max_cm + 1)
+        else:
+            out.append(min(round(best[k] * 100), max_cm))
     return tuple(out)
 
 

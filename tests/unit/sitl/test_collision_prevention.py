@@ -50,6 +50,47 @@ def test_scan_bins_see_the_boxes_where_geometry_puts_them() -> None:
     assert east[54] == 500 and east[36] == 700 and east[0] == 1201
 
 
+def test_the_scan_is_what_world_ray_sees_along_each_ray() -> None:
+    """The scan casts only the rays that can reach a box; differential check against casting all
+    216 rays with ``World.ray``, over random boxes, poses, fields of view and ranges."""
+    import random
+
+    def every_ray(world: World, x: float, y: float, z: float, yaw: float, s: RangeSensor) -> tuple[int, ...]:
+        out = []
+        for k in range(72):
+            if not (s.fov >= 360 or min(k * 5, 360 - k * 5) <= s.fov / 2):
+                out.append(UINT16_MAX)
+                continue
+            rays = [yaw + math.radians(k * 5 + d) for d in (-5 / 3, 0.0, 5 / 3)]
+            near = min(world.ray(x, y, z, math.cos(a), math.sin(a), 0.0, s.max_range) for a in rays)
+            out.append(round(s.max_range * 100) + 1 if near == math.inf else round(near * 100))
+        return tuple(out)
+
+    rng = random.Random(7)
+    checked = 0
+    for _ in range(150):
+        boxes = [
+            Obstacle(
+                size=BoxSize(l=rng.uniform(0.5, 10), w=rng.uniform(0.5, 10), h=rng.uniform(1, 30)),
+                position=BoxPosition(
+                    x=rng.uniform(-20, 20),
+                    y=rng.uniform(-20, 20),
+                    z=rng.uniform(0, 5),
+                    r=rng.uniform(-180, 180),
+                ),
+            )
+            for _ in range(rng.randint(1, 6))
+        ]
+        world = World(boxes)
+        sensor = RangeSensor(fov=rng.choice([360, 200, 90]), max_range=rng.choice([5, 12, 30]))
+        x, y, z, yaw = rng.uniform(-15, 15), rng.uniform(-15, 15), -rng.uniform(0.5, 12), rng.uniform(-4, 4)
+        if any(b.contains(x, y, z) for b in world.boxes):
+            continue
+        assert scan(world, x, y, z, yaw, sensor) == every_ray(world, x, y, z, yaw, sensor)
+        checked += 1
+    assert checked > 100
+
+
 def test_field_of_view_and_range_limit_the_scan() -> None:
     world = World([wall(5.0)])
     narrow = scan(world, 0.0, 0.0, -10.0, 0.0, RangeSensor(fov=90, max_range=4))
