@@ -386,6 +386,24 @@ class Vehicle:
             return [Msg("TIMESYNC", {"tc1": self.time_us * 1000, "ts1": int(msg.get("ts1", 0))})]
         return []
 
+    def _on_obstacle_distance(self, msg: Msg) -> list[Msg]:
+        """mavlink_receiver.cpp ``handle_message_obstacle_distance``: a companion's scan becomes
+        ``obstacle_distance`` (stamped on arrival; ``increment_f`` when set, else ``increment``)."""
+        f = msg.fields
+        inc = float(f.get("increment_f", 0.0) or 0.0)
+        inc = inc if inc > 0.0 else float(f.get("increment", 0))
+        distances = tuple(int(d) for d in f.get("distances", ()))[:72]
+        od = topics.ObstacleDistance(
+            self.time_us, inc, float(f.get("angle_offset", 0.0)),
+            distances + (65535,) * (72 - len(distances)), int(f.get("min_distance", 0)),
+            int(f.get("max_distance", 0)), int(f.get("frame", 0)), int(f.get("sensor_type", 0)),
+        )  # fmt: skip
+        self.recorder.data(od)
+        cp = self.ctrl.velocity_constraint
+        if isinstance(cp, CollisionPrevention):
+            cp.obstacle = od
+        return []
+
     def _on_mission_set_current(self, msg: Msg) -> list[Msg]:
         self.nav.set_current(int(msg.get("seq", 0)), self.time_us / 1e6)
         self.drain_nav_events()
@@ -399,6 +417,7 @@ class Vehicle:
         "SET_MODE": _on_set_mode,
         "TIMESYNC": _on_timesync,
         "MISSION_SET_CURRENT": _on_mission_set_current,
+        "OBSTACLE_DISTANCE": _on_obstacle_distance,
         "SET_POSITION_TARGET_LOCAL_NED": lambda self, msg: self.offboard.local_ned(msg),
         "SET_POSITION_TARGET_GLOBAL_INT": lambda self, msg: self.offboard.global_int(msg),
         "SET_ATTITUDE_TARGET": lambda self, msg: self.offboard.attitude_target(msg),

@@ -397,3 +397,30 @@ def test_range_sensor_spec_checks_its_ranges() -> None:
     assert range_sensor_of(_spec(avoidance="collision-prevention")) == RangeSensor()
     assert range_sensor_of(_spec()) is None
     assert range_sensor_of(_spec(rangeSensor={"fov": 90})) == RangeSensor(fov=90)
+
+
+def test_a_companion_obstacle_distance_feeds_cp_as_in_px4() -> None:
+    """mavlink_receiver.cpp: OBSTACLE_DISTANCE from a MAVLink client becomes obstacle_distance;
+    with no simulated sensor, a companion's scan showing a wall 3 m ahead stops the vehicle."""
+    v = _position_mode_vehicle({"CP_DIST": 2.0, "MPC_POS_MODE": 0}, None)
+    start_x = v.body.x
+    for _ in range(200):  # 4 s, the companion scanning at 25 Hz (every other tick)
+        if v._tick % 10 == 0:
+            d = [1201] * 72
+            d[0] = d[1] = d[71] = round((start_x + 3.0 - v.body.x) * 100)
+            v.receive(
+                Msg(
+                    "OBSTACLE_DISTANCE",
+                    {
+                        "distances": d,
+                        "increment_f": 5.0,
+                        "min_distance": 20,
+                        "max_distance": 1200,
+                        "frame": 12,
+                    },
+                )
+            )
+        v.receive(Msg("MANUAL_CONTROL", {"x": 1000, "y": 0, "z": 500, "r": 0, "buttons": 0, "target": 1}))
+        v.advance(v.time_us + 20_000)
+    assert v.nav_state == NavState.POSCTL
+    assert 0.3 < v.body.x - start_x < 1.5  # moved towards the reported wall, stopped short of CP_DIST
