@@ -113,6 +113,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "MC_ORBIT_RAD_MAX": (FLOAT, 1000.0),
     "MPC_THR_HOVER": (FLOAT, 0.5),
     "MPC_POS_MODE": (INT, 4),
+    "MPC_HOLD_MAX_XY": (FLOAT, 0.8),
     "MPC_JERK_MAX": (FLOAT, 8.0),
     # collision prevention (lib/collision_prevention)
     "CP_DIST": (FLOAT, -1.0),

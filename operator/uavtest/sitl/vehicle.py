@@ -517,8 +517,11 @@ class Vehicle:
                         out.append((i, msg))
 
     def _setup_collision_prevention(self) -> None:
-        """The position-mode task's CollisionPrevention when PX4 would run it, with its parameters."""
+        """The position-mode task of MPC_POS_MODE, and its CollisionPrevention when PX4 would run
+        it, with its parameters."""
         p = self.params
+        self.ctrl.direct_velocity = int(p["MPC_POS_MODE"]) == 0
+        self.ctrl.hold_max_xy = p["MPC_HOLD_MAX_XY"]
         if not cp_runs(p):
             self.ctrl.velocity_constraint = None
             return

@@ -424,3 +424,21 @@ def test_a_companion_obstacle_distance_feeds_cp_as_in_px4() -> None:
         v.advance(v.time_us + 20_000)
     assert v.nav_state == NavState.POSCTL
     assert 0.3 < v.body.x - start_x < 1.5  # moved towards the reported wall, stopped short of CP_DIST
+
+
+def test_mpc_pos_mode_0_flies_the_stick_velocity_and_locks_below_mpc_hold_max_xy() -> None:
+    """FlightTaskManualPosition: the velocity setpoint is the stick's at once (no ramp); a centred
+    stick controls velocity only until slower than MPC_HOLD_MAX_XY, then locks the position."""
+    from uavtest.sitl.mc_pos_control import Controller, Goal, GoalKind, Limits
+    from uavtest.sitl.params import ParamStore
+
+    ctrl = Controller(Limits.of(ParamStore()))
+    ctrl.direct_velocity, ctrl.hold_max_xy = True, 0.8
+    ctrl.update(0.02, Goal(GoalKind.VELOCITY, sticks=(0.5, 0.0, 0.5, 0.0)), 0, 0, -10, 0, 0, 0, 0.0)
+    assert (ctrl.vx, ctrl.vy) == (5.0, 0.0)  # 0.5 x MPC_VEL_MANUAL 10, in one tick
+    centred = Goal(GoalKind.VELOCITY, sticks=(0.0, 0.0, 0.5, 0.0))
+    ctrl.update(0.02, centred, 3.0, 0, -10, 2.0, 0, 0, 0.0)  # still 2 m/s: not locked
+    assert not ctrl.xy_locked and ctrl.px == 3.0
+    ctrl.update(0.02, centred, 4.0, 0, -10, 0.5, 0, 0, 0.0)  # slower than 0.8 m/s: locked here
+    ctrl.update(0.02, centred, 4.2, 0, -10, 0.3, 0, 0, 0.0)
+    assert ctrl.xy_locked and ctrl.px == 4.0

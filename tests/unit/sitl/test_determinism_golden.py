@@ -189,24 +189,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "8b23df1ec60250a821453a4e6a7b8afc48180d2e1b8e0f9fed867c93d410b36c",
+        "b439645c4246e0e4547a4737704331609db23cfdba71e72be397b1ecbf0f2920",
         "beb8e0ede2a16c1093324a0c39357b1d5ee42daa22ff814584fe8e60fb76a1b1",
     ),
     "manual_and_rtl": (
-        "4d763aec748f8510a6feaa3a1a60c66f99746739383b00c34c1d1c883206caf4",
+        "45a06ca9565f74783365fc2736237422d6f6c149692e66386c8d3e9dd99aaf9e",
         "d3f42d35da3db1c05a074d11376f6bed32b8409df6644abdd00305178405cfcf",
     ),
     "datalink_loss": (
-        "7925b8ba81b4f1b952cac3e1031e73edb38b05063da9ccdfc7df3f0794a66d53",
+        "f9fd707a8f4b09f11a05d1e63e6cc06e68295ee4f12e95ea51a8870b59d13f41",
         "382d82a89cacd76c9a59f81d18274c09e03a7043b1ab2a767292b88365fbf028",
     ),
     "crash": (
-        "06858a73a5dfd8eb09bb27f154952e069db16681b5f3867699698a57d1dd63af",
+        "114a6fdd46f9985753e70ee5655be997b125afa597949b62a239361b19745a8a",
         "e14d716a5563d41314127c1edfdbcc613b784a3efd9790739850a0b86a69c1e3",
     ),
     "params_and_commands": (
-        "6ab93053c4ea107aa712771c56695f6460e6b6ca3e97d2d1ad4702b085ba571e",
-        "f3f42bfb6ba6835b97efad99af0c0e1a641dcfa5371f97f49f2ab780b562e97b",
+        "b2d54eac0d0b3b5adf4fdc856758bdfaaf9cfc37ba63b74e4651426e625ebd5d",
+        "27b72cfaca017342387158dcaae6fa78f9ac45676275192012bf1568d100c5ff",
     ),
 }
 
