@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+import yaml
 
 from harness.engine_cli import uavtest_run
 
@@ -83,3 +84,23 @@ def test_geofence_return_comes_back_from_the_fence(repo_root: Path, tmp_path: Pa
         rows = list(csv.DictReader((replica / "trajectory.csv").open()))
         assert 50.0 < max(float(row["x"]) for row in rows) < 60.0  # crossed the fence, then braked
         assert abs(float(rows[-1]["x"])) < 2.5 and abs(float(rows[-1]["y"])) < 2.5  # home
+
+
+def test_collision_prevention_stops_the_pilot_short_of_the_wall(repo_root: Path, tmp_path: Path) -> None:
+    out = uavtest_run(repo_root / "examples/collision-prevention.yaml", tmp_path)
+    assert out.code == 0, out.stderr[-3000:]
+    assert out.summary is not None and out.summary["passed"] == 3
+    for r in out.summary["results"]:
+        assert r["metrics"]["collision"] is False
+        assert 1.0 < r["metrics"]["min_obstacle_distance"] < 2.5  # about CP_DIST (2 m)
+    assert any("only in position mode" in w for w in out.summary["warnings"])
+    # the same test without CP_DIST: CP off (said so), the pilot flies into the wall
+    test = yaml.safe_load((repo_root / "examples/collision-prevention.yaml").read_text())
+    del test["spec"]["vehicle"]["params"]["CP_DIST"]
+    off = tmp_path / "cp-off.yaml"
+    off.write_text(yaml.safe_dump(test))
+    out = uavtest_run(off, tmp_path / "off")
+    assert out.code == 1, out.stderr[-3000:]
+    assert out.summary is not None and out.summary["failed"] == 3
+    assert all(r["metrics"]["collision"] for r in out.summary["results"])
+    assert any("CP_DIST is -1" in w for w in out.summary["warnings"])

@@ -90,15 +90,18 @@ def flight_intent(spec: UavTestSpec, commands: Sequence[Command] | None = None) 
 
 
 def simulator_warnings(spec: UavTestSpec) -> list[str]:
-    """What the chosen simulator cannot simulate in ``spec``, to be said with the results.
+    """What the chosen simulator cannot simulate in ``spec``, to be said with the results
+    (and what its Collision Prevention set-up will not do, ``collision_prevention_warnings``).
 
     PX4 SITL with SIH (the PX4 simulator uavtest runs) has no obstacles — the vehicle flies
     through them, so they are only judged geometrically against the trajectory — and, in PX4
     v1.15, no wind model (SIH's SIH_WIND_N/E parameters arrived after v1.15).
     """
+    from uavtest.spec.collision_prevention import collision_prevention_warnings
+
+    out = collision_prevention_warnings(spec)
     if spec.vehicle.simulator is not Simulator.PX4:
-        return []
-    out: list[str] = []
+        return out
     if spec.world.obstacles:
         n = len(spec.world.obstacles)
         out.append(

@@ -472,7 +472,57 @@ def orbit_execution_status(v: Vehicle, t: int) -> Msg:
 ORBIT_STATUS_HZ = 2.0
 
 #: message name → builder
-STREAMS: dict[str, Callable[[Vehicle, int], Msg]] = {
+#: OBSTACLE_DISTANCE goes out only for an obstacle_distance_fused published this recently
+FUSED_FRESH_US = 100_000
+
+
+def obstacle_distance(v: Vehicle, t: int) -> Msg | None:
+    """streams/OBSTACLE_DISTANCE.hpp: Collision Prevention's map (``obstacle_distance_fused``),
+    sent only when CP has published it (it runs in position mode with CP_DIST > 0 and
+    MPC_POS_MODE 0); ``increment`` 0, the increment in ``increment_f``. None: nothing to send."""
+    cp = v.ctrl.velocity_constraint
+    fused = getattr(cp, "published", None)
+    if fused is None or t - cp.last_call_us > FUSED_FRESH_US:  # type: ignore[union-attr]
+        return None
+    return Msg(
+        "OBSTACLE_DISTANCE",
+        {
+            "time_usec": fused.timestamp,
+            "sensor_type": fused.sensor_type,
+            "distances": list(fused.distances),
+            "increment": 0,
+            "min_distance": fused.min_distance,
+            "max_distance": fused.max_distance,
+            "increment_f": fused.increment,
+            "angle_offset": fused.angle_offset,
+            "frame": fused.frame,
+        },
+    )
+
+
+def distance_sensor(v: Vehicle, t: int) -> Msg | None:
+    """streams/DISTANCE_SENSOR.hpp: the range sensor's distance_sensor (forward reading), cm;
+    None without a sensor."""
+    rs = v.sim.range_sensor
+    ds = rs.last_range if rs is not None else None
+    if ds is None:
+        return None
+    return Msg(
+        "DISTANCE_SENSOR",
+        {
+            "time_boot_ms": ds.timestamp // 1000,
+            "min_distance": int(ds.min_distance * 1e2),
+            "max_distance": int(ds.max_distance * 1e2),
+            "current_distance": min(int(ds.current_distance * 1e2), 65535),
+            "type": ds.type,
+            "id": 0,
+            "orientation": ds.orientation,
+            "covariance": int(ds.variance * 1e4),
+        },
+    )
+
+
+STREAMS: dict[str, Callable[[Vehicle, int], Msg | None]] = {
     "LOCAL_POSITION_NED": local_position_ned,
     "ATTITUDE": attitude,
     "GLOBAL_POSITION_INT": global_position_int,
@@ -491,4 +541,6 @@ STREAMS: dict[str, Callable[[Vehicle, int], Msg]] = {
     "HIGHRES_IMU": highres_imu,
     "SCALED_PRESSURE": scaled_pressure,
     "WIND_COV": wind_cov,
+    "OBSTACLE_DISTANCE": obstacle_distance,
+    "DISTANCE_SENSOR": distance_sensor,
 }

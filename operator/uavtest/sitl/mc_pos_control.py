@@ -20,6 +20,7 @@ What gives PX4 its flight times, modelled after PX4 v1.15's ``mc_pos_control`` a
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
 
@@ -150,6 +151,16 @@ class Controller:
         self.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self.ramp = 0.0  # seconds into the takeoff ramp
         self.of_ramp = 1e9  # seconds into an offboard takeoff (the vehicle restarts it while landed)
+        #: Collision Prevention in position mode (FlightTaskManualPosition): (stick velocity NED,
+        #: velocity, yaw) -> allowed velocity setpoint; None when PX4 would not run it
+        self.velocity_constraint: (
+            Callable[[float, float, float, float, float], tuple[float, float]] | None
+        ) = None
+        #: MPC_POS_MODE 0 (FlightTaskManualPosition): the stick velocity straight to the velocity
+        #: loop, the position locked once slower than ``hold_max_xy`` (MPC_HOLD_MAX_XY); set by the vehicle
+        self.direct_velocity = False
+        self.hold_max_xy = 0.8
+        self.xy_locked = False
 
     def reset(self, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float) -> None:
         """Restart the reference at the vehicle's state (mode switch, arming)."""
@@ -390,15 +401,35 @@ class Controller:
         # position mode: sticks are a body-frame velocity
         bvx, bvy = sx * lim.vel_manual, sy * lim.vel_manual
         self.stretch = 1.0
-        self._accelerate(dt, c * bvx - s * bvy, s * bvx + c * bvy)
-        if sx == 0.0 and sy == 0.0:
-            self.px += self.vx * dt
-            self.py += self.vy * dt
+        wx, wy = c * bvx - s * bvy, s * bvx + c * bvy
+        if self.velocity_constraint is not None:
+            wx, wy = self.velocity_constraint(wx, wy, vx, vy, yaw)
+        if self.direct_velocity:
+            self._direct_velocity(wx, wy, x, y, vx, vy)
         else:
-            self.px, self.py = x + self.vx * 0.2, y + self.vy * 0.2
+            self._accelerate(dt, wx, wy)
+            if wx == 0.0 and wy == 0.0:  # centred sticks, or CP's zero: brake and hold
+                self.px += self.vx * dt
+                self.py += self.vy * dt
+            else:
+                self.px, self.py = x + self.vx * 0.2, y + self.vy * 0.2
         ax, ay = self._xy_loops(dt, x, y, vx, vy)
         ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
         return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), self.yawrate_sp
+
+    def _direct_velocity(self, wx: float, wy: float, x: float, y: float, vx: float, vy: float) -> None:
+        """FlightTaskManualPosition (MPC_POS_MODE 0): the velocity setpoint as the sticks (and
+        Collision Prevention) give it, no acceleration or jerk limit; with a zero setpoint the
+        position is locked once the vehicle is slower than MPC_HOLD_MAX_XY (``_updateXYlock``),
+        before that only the velocity is controlled."""
+        self.vx, self.vy, self.ax, self.ay = wx, wy, 0.0, 0.0
+        if wx != 0.0 or wy != 0.0:
+            self.xy_locked = False
+        elif not self.xy_locked and (self.hold_max_xy <= 0.0 or math.hypot(vx, vy) < self.hold_max_xy):
+            self.xy_locked = True
+            self.px, self.py = x, y
+        if not self.xy_locked:
+            self.px, self.py = x, y
 
 
 #: the controller's output with the motors off: no tilt, thrust balancing gravity, no yaw rate

@@ -112,6 +112,14 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "MPC_HOLD_DZ": (FLOAT, 0.1),
     "MC_ORBIT_RAD_MAX": (FLOAT, 1000.0),
     "MPC_THR_HOVER": (FLOAT, 0.5),
+    "MPC_POS_MODE": (INT, 4),
+    "MPC_HOLD_MAX_XY": (FLOAT, 0.8),
+    "MPC_JERK_MAX": (FLOAT, 8.0),
+    # collision prevention (lib/collision_prevention)
+    "CP_DIST": (FLOAT, -1.0),
+    "CP_DELAY": (FLOAT, 0.4),
+    "CP_GUIDE_ANG": (FLOAT, 30.0),
+    "CP_GO_NO_DATA": (INT, 0),
     # land detector
     "LNDMC_TRIG_TIME": (FLOAT, 1.0),
     "LNDMC_Z_VEL_MAX": (FLOAT, 0.25),
@@ -131,7 +139,6 @@ UNMODELLED_AT_BOOT: tuple[str, ...] = (
     "MPC_TILTMAX_LND",
     "MPC_XY_VEL_D_ACC",
     "MPC_XY_TRAJ_P",
-    "MPC_POS_MODE",
     "MPC_ALT_MODE",
     "MC_YAWRATE_MAX",
     "LNDMC_XY_VEL_MAX",

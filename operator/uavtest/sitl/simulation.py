@@ -3,8 +3,9 @@
 One object on the vehicle (``Vehicle.sim``) so that the vehicle keeps few instance attributes
 (CPython 3.11 specialises ``self.x`` loads in the hot loop only while an instance has at most 30):
 ``battery`` (battery_simulator), ``gps`` (the GPS and its failure injection), ``failure_injector``
-(blocked motors and their tumble), ``failure_detector`` (commander/failure_detector) and
-``faulty``: a failure was injected, so the per-tick failure paths run from then on.
+(blocked motors and their tumble), ``failure_detector`` (commander/failure_detector),
+``range_sensor`` (the simulated obstacle-distance sensor, None without one) and ``faulty``: a
+failure was injected, so the per-tick failure paths run from then on.
 """
 
 from __future__ import annotations
@@ -15,16 +16,19 @@ from uavtest.sitl.battery_simulator import BatterySimulator
 from uavtest.sitl.commander.failure_detector import FailureDetector, FailureInjector
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.sensor_gps_sim import GpsSimulator
+from uavtest.sitl.sensor_obstacle_distance_sim import ObstacleDistanceSim
+from uavtest.spec.models import RangeSensor
 
 __all__ = ["Simulation"]
 
 
 class Simulation:
-    __slots__ = ("battery", "failure_detector", "failure_injector", "faulty", "gps")
+    __slots__ = ("battery", "failure_detector", "failure_injector", "faulty", "gps", "range_sensor")
 
-    def __init__(self, params: ParamStore, seed: int) -> None:
+    def __init__(self, params: ParamStore, seed: int, range_sensor: RangeSensor | None = None) -> None:
         self.gps = GpsSimulator(random.Random(f"{seed}:gps"))
         self.battery = BatterySimulator(params)
         self.failure_injector = FailureInjector()
         self.failure_detector = FailureDetector()
         self.faulty = False
+        self.range_sensor = ObstacleDistanceSim(range_sensor) if range_sensor is not None else None

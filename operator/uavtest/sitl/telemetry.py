@@ -11,7 +11,9 @@ Rates above the 50 Hz control tick (ONBOARD ATTITUDE at 100 Hz) are sent once pe
 PX4's "unlimited" rate (a message per uORB update) is the sensor's rate: GPS_RAW_INT at the
 simulated GPS's 10 Hz. HEARTBEAT is sent at 1 Hz on every link whatever the mode (PX4
 ``Mavlink::task_main`` sends it itself) and cannot be changed by SET_MESSAGE_INTERVAL
-(``MavlinkReceiver::set_message_interval`` refuses message id 0).
+(``MavlinkReceiver::set_message_interval`` refuses message id 0). DISTANCE_SENSOR and
+OBSTACLE_DISTANCE are configured on every link, as in PX4, but a stream sends only when its topic
+has news (a range sensor; Collision Prevention running): their builders may return None.
 """
 
 from __future__ import annotations
@@ -41,6 +43,8 @@ MODES: dict[str, dict[str, float]] = {
         "SYS_STATUS": 1.0,
         "VFR_HUD": 4.0,
         "WIND_COV": 0.5,
+        "DISTANCE_SENSOR": 0.5,  # sent only with a range sensor
+        "OBSTACLE_DISTANCE": 1.0,  # sent only while Collision Prevention runs
     },
     ONBOARD: {
         "HEARTBEAT": 1.0,
@@ -61,6 +65,8 @@ MODES: dict[str, dict[str, float]] = {
         "SYSTEM_TIME": 1.0,
         "VFR_HUD": 10.0,
         "WIND_COV": 10.0,
+        "DISTANCE_SENSOR": 10.0,
+        "OBSTACLE_DISTANCE": 10.0,
     },
 }
 
@@ -91,11 +97,13 @@ MESSAGE_IDS: dict[int, str] = {
     42: "MISSION_CURRENT",
     74: "VFR_HUD",
     105: "HIGHRES_IMU",
+    132: "DISTANCE_SENSOR",
     141: "ALTITUDE",
     147: "BATTERY_STATUS",
     231: "WIND_COV",
     242: "HOME_POSITION",
     245: "EXTENDED_SYS_STATE",
+    330: "OBSTACLE_DISTANCE",
     331: "ODOMETRY",
 }
 _ID_OF = {name: mid for mid, name in MESSAGE_IDS.items()}

@@ -29,11 +29,15 @@ __all__ = [
     "TOPICS",
     "ActuatorArmed",
     "BatteryStatus",
+    "CollisionConstraints",
+    "DistanceSensor",
     "FailureDetectorStatus",
     "GeofenceResult",
     "HomePosition",
     "ManualControlSetpoint",
     "MissionResult",
+    "ObstacleDistance",
+    "ObstacleDistanceFused",
     "OffboardControlMode",
     "PositionSetpoint",
     "PositionSetpointTriplet",
@@ -425,6 +429,59 @@ class FailureDetectorStatus:
     fd_motor: bool = ulog("bool")
     imbalanced_prop_metric: float = ulog("float")
     motor_failure_mask: int = ulog("uint16_t")
+
+
+@topic("obstacle_distance")
+@dataclass(slots=True)
+class ObstacleDistance:
+    """msg/ObstacleDistance.msg (fields in PX4's size order): a range sensor's scan, 72 bins of
+    ``increment`` degrees from ``angle_offset`` (``frame`` MAV_FRAME_BODY_FRD: 0 is the front,
+    positive to the right), cm; ``max_distance`` + 1 no obstacle in range, UINT16_MAX no data."""
+
+    timestamp: int = ulog("uint64_t")
+    increment: float = ulog("float")
+    angle_offset: float = ulog("float")
+    distances: tuple[int, ...] = ulog("uint16_t[72]")
+    min_distance: int = ulog("uint16_t")
+    max_distance: int = ulog("uint16_t")
+    frame: int = ulog("uint8_t")
+    sensor_type: int = ulog("uint8_t")
+
+
+@topic("obstacle_distance_fused")
+@dataclass(slots=True)
+class ObstacleDistanceFused(ObstacleDistance):
+    """The same message as Collision Prevention's map (10-degree bins, 36 used), PX4's
+    ``obstacle_distance_fused`` (what the OBSTACLE_DISTANCE stream sends)."""
+
+
+@topic("collision_constraints")
+@dataclass(slots=True)
+class CollisionConstraints:
+    """msg/CollisionConstraints.msg: the position-mode velocity setpoint before and after CP."""
+
+    timestamp: int = ulog("uint64_t")
+    original_setpoint: tuple[float, float] = ulog("float[2]")
+    adapted_setpoint: tuple[float, float] = ulog("float[2]")
+
+
+@topic("distance_sensor")
+@dataclass(slots=True)
+class DistanceSensor:
+    """msg/DistanceSensor.msg (fields in PX4's size order), metres and radians."""
+
+    timestamp: int = ulog("uint64_t")
+    device_id: int = ulog("uint32_t")
+    min_distance: float = ulog("float")
+    max_distance: float = ulog("float")
+    current_distance: float = ulog("float")
+    variance: float = ulog("float")
+    h_fov: float = ulog("float")
+    v_fov: float = ulog("float")
+    q: tuple[float, float, float, float] = ulog("float[4]")
+    signal_quality: int = ulog("int8_t")
+    type: int = ulog("uint8_t")
+    orientation: int = ulog("uint8_t")
 
 
 #: topics subscribed in every log, in this order (position_setpoint only nests)

@@ -34,6 +34,7 @@ from uavtest.px4.modes import (
 )
 from uavtest.sitl import mav
 from uavtest.sitl import uorb as topics
+from uavtest.sitl.collision_prevention import CollisionPrevention, CpParams
 from uavtest.sitl.commander.commander import FLOWN_NAV_STATES, Commander
 from uavtest.sitl.commander.failure_detector import TUMBLE_RATE
 from uavtest.sitl.commander.vehicle_command import handle_command, unsupported
@@ -54,7 +55,7 @@ from uavtest.sitl.simulation import Simulation
 from uavtest.sitl.simulator_sih import Body, WindModel, World
 from uavtest.sitl.telemetry import MODES, ONBOARD, Schedule
 from uavtest.sitl.ulog_writer import LOG_LEVEL
-from uavtest.spec.models import Avoidance, Home, Obstacle, UavTestSpec, Wind
+from uavtest.spec.models import Avoidance, Home, Obstacle, RangeSensor, UavTestSpec, Wind
 
 __all__ = ["STEP_US", "SimConfig", "Vehicle"]
 
@@ -90,6 +91,9 @@ class SimConfig:
     seed: int = 0
     #: what keeps the vehicle off obstacles (``vehicle.avoidance``)
     avoidance: Avoidance = Avoidance.NONE
+    #: the simulated obstacle-distance sensor (``vehicle.rangeSensor``; defaults with
+    #: collision-prevention), None: no sensor
+    range_sensor: RangeSensor | None = None
     #: the host clock (Unix µs) at boot, for SYSTEM_TIME; 0 (1970) keeps a run independent of the date
     utc_boot_us: int = 0
     #: the MAVLink links (name, telemetry mode of ``telemetry.MODES``), each with its own schedule
@@ -106,7 +110,22 @@ class SimConfig:
             params=dict(spec.vehicle.params if params is None else params),
             seed=seed,
             avoidance=spec.vehicle.avoidance,
+            range_sensor=range_sensor_of(spec),
         )
+
+
+def range_sensor_of(spec: UavTestSpec) -> RangeSensor | None:
+    """The test's range sensor: ``vehicle.rangeSensor``, or its defaults with collision-prevention."""
+    v = spec.vehicle
+    if v.range_sensor is None and v.avoidance is Avoidance.COLLISION_PREVENTION:
+        return RangeSensor()
+    return v.range_sensor
+
+
+def cp_runs(params: ParamStore) -> bool:
+    """Whether PX4 v1.15 runs Collision Prevention in position mode: CP_DIST > 0 (``is_active``)
+    and the position-mode task that has it, FlightTaskManualPosition (MPC_POS_MODE 0)."""
+    return params["CP_DIST"] > 0 and int(params["MPC_POS_MODE"]) == 0
 
 
 class Vehicle:
@@ -125,7 +144,7 @@ class Vehicle:
         self.est = Estimator(random.Random(f"{seed}:estimator"))
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
-        self.sim = Simulation(self.params, seed)
+        self.sim = Simulation(self.params, seed, config.range_sensor)
         land_jitter = variation.uniform(0.0, 0.8)
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
@@ -165,6 +184,7 @@ class Vehicle:
         self.offboard = Offboard(self)
         self.commander = Commander(self)
         self.recorder.start(0, self.params)
+        self._setup_collision_prevention()
         self._estimate()
         self._control_tick(0)
 
@@ -366,6 +386,24 @@ class Vehicle:
             return [Msg("TIMESYNC", {"tc1": self.time_us * 1000, "ts1": int(msg.get("ts1", 0))})]
         return []
 
+    def _on_obstacle_distance(self, msg: Msg) -> list[Msg]:
+        """mavlink_receiver.cpp ``handle_message_obstacle_distance``: a companion's scan becomes
+        ``obstacle_distance`` (stamped on arrival; ``increment_f`` when set, else ``increment``)."""
+        f = msg.fields
+        inc = float(f.get("increment_f", 0.0) or 0.0)
+        inc = inc if inc > 0.0 else float(f.get("increment", 0))
+        distances = tuple(int(d) for d in f.get("distances", ()))[:72]
+        od = topics.ObstacleDistance(
+            self.time_us, inc, float(f.get("angle_offset", 0.0)),
+            distances + (65535,) * (72 - len(distances)), int(f.get("min_distance", 0)),
+            int(f.get("max_distance", 0)), int(f.get("frame", 0)), int(f.get("sensor_type", 0)),
+        )  # fmt: skip
+        self.recorder.data(od)
+        cp = self.ctrl.velocity_constraint
+        if isinstance(cp, CollisionPrevention):
+            cp.obstacle = od
+        return []
+
     def _on_mission_set_current(self, msg: Msg) -> list[Msg]:
         self.nav.set_current(int(msg.get("seq", 0)), self.time_us / 1e6)
         self.drain_nav_events()
@@ -379,6 +417,7 @@ class Vehicle:
         "SET_MODE": _on_set_mode,
         "TIMESYNC": _on_timesync,
         "MISSION_SET_CURRENT": _on_mission_set_current,
+        "OBSTACLE_DISTANCE": _on_obstacle_distance,
         "SET_POSITION_TARGET_LOCAL_NED": lambda self, msg: self.offboard.local_ned(msg),
         "SET_POSITION_TARGET_GLOBAL_INT": lambda self, msg: self.offboard.global_int(msg),
         "SET_ATTITUDE_TARGET": lambda self, msg: self.offboard.attitude_target(msg),
@@ -417,6 +456,9 @@ class Vehicle:
             if result is not None:
                 self.recorder.data(result)
         b, e, st = self.body, self.est, self.st
+        cp = self.ctrl.velocity_constraint
+        if sim.range_sensor is not None or cp is not None:
+            self._range_and_cp_inputs(t, cp)  # type: ignore[arg-type]
         if commander.armed and not commander.crashed:
             self._cmd = self.ctrl.update(
                 dt, goal, st.x, st.y, st.z, b.vx + e.evx, b.vy + e.evy, b.vz + e.evz, st.yaw
@@ -426,6 +468,8 @@ class Vehicle:
             self._cmd = IDLE
             b.motors = False
             self.ctrl.reset(st.x, st.y, st.z, 0.0, 0.0, 0.0, st.yaw)
+        if cp is not None and cp.fused is not None:
+            self._cp_outputs(t, cp)  # type: ignore[arg-type]
         if faulty and sim.failure_injector.esc_blocked:
             self._motor_out(t, dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:  # 5 Hz: battery, failure detector
@@ -455,18 +499,73 @@ class Vehicle:
         if len(schedules) == 1:
             for name in schedules[0].due(t):
                 if name not in held:
-                    out.append(STREAMS[name](self, t))
+                    msg = STREAMS[name](self, t)
+                    if msg is not None:  # a stream whose topic has no news sends nothing
+                        out.append(msg)
             return
-        built: dict[str, Msg] = {}
+        built: dict[str, Msg | None] = {}
         for i, schedule in enumerate(schedules):
             if not self.streaming[i]:
                 continue  # nothing is built for a quiet link
             for name in schedule.due(t):
                 if name not in held:
-                    msg = built.get(name)
-                    if msg is None:
+                    if name in built:
+                        msg = built[name]
+                    else:
                         msg = built[name] = STREAMS[name](self, t)
-                    out.append((i, msg))
+                    if msg is not None:
+                        out.append((i, msg))
+
+    def _setup_collision_prevention(self) -> None:
+        """The position-mode task of MPC_POS_MODE, and its CollisionPrevention when PX4 would run
+        it, with its parameters."""
+        p = self.params
+        self.ctrl.direct_velocity = int(p["MPC_POS_MODE"]) == 0
+        self.ctrl.hold_max_xy = p["MPC_HOLD_MAX_XY"]
+        if not cp_runs(p):
+            self.ctrl.velocity_constraint = None
+            return
+        params = CpParams(
+            p["CP_DIST"], p["CP_DELAY"], p["CP_GUIDE_ANG"], bool(int(p["CP_GO_NO_DATA"])),
+            p["MPC_XY_P"], p["MPC_JERK_MAX"], p["MPC_ACC_HOR"],
+        )  # fmt: skip
+        old = self.ctrl.velocity_constraint
+        if isinstance(old, CollisionPrevention):
+            old.params = params
+        else:
+            self.ctrl.velocity_constraint = CollisionPrevention(params, self.time_us)
+
+    def _range_and_cp_inputs(self, t: int, cp: CollisionPrevention | None) -> None:
+        """The range sensor's scan when due (logged, handed to CP); CP's time and attitude."""
+        b = self.body
+        rs = self.sim.range_sensor
+        if rs is not None:
+            out = rs.update(t, self.world, b.x, b.y, b.z, b.yaw)
+            if out is not None:
+                od, ds = out
+                rec = self.recorder
+                rec.data(od)
+                if t - rs.logged_us >= 1_000_000:  # the logger takes distance_sensor at 1 Hz
+                    rs.logged_us = t
+                    rec.data(ds)
+                if cp is not None:
+                    cp.obstacle, cp.distance = od, ds
+        if cp is not None:
+            cp.now_us = t
+            cp.pitch = b.tilt()[1]
+            cp.max_speed = self.limits.vel_manual
+
+    def _cp_outputs(self, t: int, cp: CollisionPrevention) -> None:
+        """What CP published this tick (logged; OBSTACLE_DISTANCE streams it) and its Hold request."""
+        fused, cp.fused = cp.fused, None
+        assert fused is not None
+        cp.published = fused
+        self.recorder.data(fused)
+        if cp.constraints is not None:
+            self.recorder.data(cp.constraints)
+        if cp.want_hold:  # _publishVehicleCmdDoLoiter: VEHICLE_CMD_DO_SET_MODE AUTO LOITER
+            cp.want_hold = False
+            self.commander.set_mode(NavState.AUTO_LOITER)
 
     def _motor_out(self, t: int, dt: float) -> None:
         """A blocked motor (failure injection): a quadrotor cannot hold its attitude; it tumbles and
@@ -532,6 +631,7 @@ class Vehicle:
         self.param_proto.changed.clear()
         self.limits = Limits.of(self.params)
         self.ctrl.lim = self.limits
+        self._setup_collision_prevention()
         self.sim.battery.update_params()
 
     # ------------------------------------------------------------------ navigator events

@@ -12,6 +12,7 @@ from typing import TextIO
 
 from uavtest.engine.speed import speed_factor_notice
 from uavtest.errors import ExitCode
+from uavtest.spec.collision_prevention import collision_prevention_warnings
 from uavtest.spec.commands import resolved_commands
 from uavtest.spec.crd import crd_yaml
 from uavtest.spec.loaders import load_test
@@ -53,6 +54,8 @@ def validate_command(test: Path, *, out: TextIO | None = None) -> int:
         print(f"warning: {notice}", file=out)
     if any(c.action == CommandAction.YAW for c in commands):
         print(f"warning: {YAW_NOTICE}", file=out)
+    for w in collision_prevention_warnings(spec):
+        print(f"warning: {w}", file=out)
     speed = speed_factor_notice(spec)
     if speed:
         print(f"warning: {speed}", file=out)

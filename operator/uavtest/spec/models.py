@@ -65,6 +65,7 @@ __all__ = [
     "MissionItemKind",
     "Obstacle",
     "Orbit",
+    "RangeSensor",
     "ReferenceTrajectory",
     "Setpoint",
     "SetpointFrame",
@@ -118,6 +119,28 @@ class Avoidance(StrEnum):
     LOCAL_PLANNER = "local-planner"  # PX4-Avoidance's local planner (COM_OBS_AVOID 1), the competition's SUT
 
 
+class RangeSensor(Model):
+    """The simulated scanning range sensor (2-D lidar) that feeds Collision Prevention
+    (``obstacle_distance``: 72 bins of 5 degrees, body frame); built-in simulator only."""
+
+    fov: float = Field(
+        360.0,
+        gt=0,
+        le=360,
+        allow_inf_nan=False,
+        description="horizontal field of view, degrees, centred on the vehicle's front",
+    )
+    min_range: float = Field(0.2, ge=0, le=10, allow_inf_nan=False, description="minimum distance, metres")
+    max_range: float = Field(12.0, gt=0, le=600, allow_inf_nan=False, description="maximum distance, metres")
+    rate: float = Field(10.0, gt=0, le=50, allow_inf_nan=False, description="scans per second, Hz")
+
+    @model_validator(mode="after")
+    def _min_below_max(self) -> RangeSensor:
+        if self.min_range >= self.max_range:
+            raise ValueError(f"minRange {self.min_range} is not below maxRange {self.max_range}")
+        return self
+
+
 #: PX4 parameters are INT32 or FLOAT; a float must be finite
 ParamValue = ParamInt | ParamFloat
 
@@ -137,6 +160,13 @@ class Vehicle(Model):
             "none; collision-prevention (PX4 Collision Prevention in position mode, a simulated "
             "range sensor); local-planner (PX4-Avoidance's local planner in missions, as the UAV "
             "Testing Competition flies)"
+        ),
+    )
+    range_sensor: RangeSensor | None = Field(
+        None,
+        description=(
+            "the simulated range sensor (builtin only); attached with avoidance collision-prevention "
+            "(these defaults if not given) or when given"
         ),
     )
     speed_factor: SpeedFactor | None = Field(

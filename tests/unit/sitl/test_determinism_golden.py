@@ -187,27 +187,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 }
 
 #: (ulog sha256, messages sha256) per scenario; re-recorded for issue 10's PX4-like flight (smooth
-#: EKF2-like estimator error, FlightTaskAuto heading lock inside NAV_ACC_RAD, move-to-land altitude).
+#: EKF2-like estimator error, FlightTaskAuto heading lock inside NAV_ACC_RAD, move-to-land altitude)
+#: and for Collision Prevention (new ULog formats obstacle_distance(_fused), collision_constraints,
+#: distance_sensor and the CP_* / MPC_POS_MODE parameters in the header).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "4d13f84f55997c0ea69d723c057677ad9bbfc0685f1bf7533f3342590253ea60",
+        "f4921f062778eed6b677472ae7eb1972f04a0c924006a38d09801802dd63e15c",
         "0b9abc5eaab4d6202c69e3129c77baa0248b15fd34acd028d810323fb1a8530b",
     ),
     "manual_and_rtl": (
-        "6d02f28d1a7b12eb0e61158f6645d8e0db3329f9f42351e8b4dbeba93f8dac9c",
+        "c5f9c23e3afc4d04fb22ce4391b5680773e61fba050c1b8ccf36742f82ea2731",
         "c27fe59442b7d67f3c89e17dcfa56dad42fcbb3ff1dcd1d7813c974305364c6d",
     ),
     "datalink_loss": (
-        "b154f3e67df6ad4a1666540415574ed523adfd96a7626f564de609bf426aebfa",
+        "6825836db4093b70eb1f70051696172076d3424e07cd00482e1b1bc08f8acb48",
         "9fca5a2c8029a328adf83633b0d1b2d73e61d6c4f7af9fd3e6eacb1db8406ee6",
     ),
     "crash": (
-        "01a921617bcb59aa97d776c52ae03cd6d24e510ed1a5a8e1ae5d706471652cb3",
+        "673da353da57ea99cd8cb49b0a169635e60e96b5c4a0133d5184a1d5974c2354",
         "9a91c05b7a0afb75c8e51608e88e88c7d4f22e43289ca5680a5351443ec0603e",
     ),
     "params_and_commands": (
-        "a33bea38cf3322b2f3bd4afcc1eb39edc8bccbaccf2b3d78708450279d8a2824",
-        "6dcb8a116d3f897c434f7d22568cb987e2686d844c5f2c91787241527334fc34",
+        "88f695e5289b3532fbcca14d0062201c33edd788acd2168ba633da16d19abbe6",
+        "dcc15479fbe617991d46bf180aca49faa239d2382b0b3c1fa9cd36ccb5652fd7",
     ),
 }
 

@@ -213,7 +213,10 @@ def _request(v: Vehicle, wanted: int, extra: list[Msg]) -> MavResult:
     if wanted == _AUTOPILOT_VERSION:
         extra.append(autopilot_version(v))
     elif wanted in MESSAGE_IDS and (wanted != _HOME_POSITION or v.home_set):
-        extra.append(STREAMS[MESSAGE_IDS[wanted]](v, v.time_us))
+        msg = STREAMS[MESSAGE_IDS[wanted]](v, v.time_us)
+        if msg is None:  # a stream with nothing to send (no range sensor, CP not running)
+            return MavResult.DENIED
+        extra.append(msg)
     else:
         return MavResult.UNSUPPORTED
     return MavResult.ACCEPTED
