@@ -4,7 +4,8 @@ One object on the vehicle (``Vehicle.sim``) so that the vehicle keeps few instan
 (CPython 3.11 specialises ``self.x`` loads in the hot loop only while an instance has at most 30):
 ``battery`` (battery_simulator), ``gps`` (the GPS and its failure injection), ``failure_injector``
 (blocked motors and their tumble), ``failure_detector`` (commander/failure_detector) and
-``faulty``: a failure was injected, so the per-tick failure paths run from then on.
+``faulty``: a failure was injected, so the per-tick failure paths run from then on; ``planner``:
+PX4-Avoidance's local planner with its depth camera when the test flies with it (else None).
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import random
 
 from uavtest.sitl.battery_simulator import BatterySimulator
 from uavtest.sitl.commander.failure_detector import FailureDetector, FailureInjector
+from uavtest.sitl.local_planner import LocalPlanner
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.sensor_gps_sim import GpsSimulator
 
@@ -20,7 +22,7 @@ __all__ = ["Simulation"]
 
 
 class Simulation:
-    __slots__ = ("battery", "failure_detector", "failure_injector", "faulty", "gps")
+    __slots__ = ("battery", "failure_detector", "failure_injector", "faulty", "gps", "planner")
 
     def __init__(self, params: ParamStore, seed: int) -> None:
         self.gps = GpsSimulator(random.Random(f"{seed}:gps"))
@@ -28,3 +30,4 @@ class Simulation:
         self.failure_injector = FailureInjector()
         self.failure_detector = FailureDetector()
         self.faulty = False
+        self.planner: LocalPlanner | None = None

@@ -40,6 +40,7 @@ from uavtest.sitl.commander.vehicle_command import handle_command, unsupported
 from uavtest.sitl.ekf2 import Estimator
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.land_detector import LandDetector
+from uavtest.sitl.local_planner import LocalPlanner, PlannerParams
 from uavtest.sitl.mav import LandedState, MavSeverity, Msg, ParamType
 from uavtest.sitl.mavlink_io import custom_mode_name
 from uavtest.sitl.mavlink_streams import ORBIT_STATUS_HZ, STREAMS, SW_VERSION, orbit_execution_status
@@ -50,6 +51,7 @@ from uavtest.sitl.offboard import Offboard
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
+from uavtest.sitl.sensor_depth_sim import DepthCamera
 from uavtest.sitl.simulation import Simulation
 from uavtest.sitl.simulator_sih import Body, WindModel, World
 from uavtest.sitl.telemetry import MODES, ONBOARD, Schedule
@@ -114,7 +116,8 @@ class Vehicle:
         self.config = config
         seed = config.seed
         variation = random.Random(f"{seed}:vehicle")
-        self.params = ParamStore(config.params)
+        planner = config.avoidance is Avoidance.LOCAL_PLANNER
+        self.params = ParamStore({**config.params, "COM_OBS_AVOID": 1} if planner else config.params)
         self.proj = Projection(config.home.lat, config.home.lon)
         self.home_alt = config.home.alt
         self.body = Body(
@@ -126,6 +129,10 @@ class Vehicle:
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed)
+        if planner:  # PX4-Avoidance's local planner flies the auto modes' waypoints (COM_OBS_AVOID 1)
+            camera = DepthCamera(self.world, random.Random(f"{seed}:depth"))
+            cruise = PlannerParams(cruise=self.params["MPC_XY_CRUISE"])
+            self.sim.planner = LocalPlanner(camera, random.Random(f"{seed}:local_planner"), cruise)
         land_jitter = variation.uniform(0.0, 0.8)
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
@@ -524,7 +531,12 @@ class Vehicle:
             if landed and c.sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2 and kind != GoalKind.ATTITUDE:
                 return Goal(GoalKind.IDLE)
             return Goal(kind, sticks=c.sticks)
-        return self.nav.update(self.st, t / 1e6)
+        goal = self.nav.update(self.st, t / 1e6)
+        planner = self.sim.planner
+        if planner is None or ns is _ORBIT:  # FlightTaskOrbit has no avoidance
+            return goal
+        b, e, st = self.body, self.est, self.st
+        return planner.update(t / 1e6, CONTROL_DT, st.x, st.y, st.z, st.yaw, b.vx + e.evx, b.vy + e.evy, goal)
 
     def _params_changed(self) -> None:
         for name in self.param_proto.changed:
