@@ -63,6 +63,7 @@ ACCEL = 1.5  # m/s^2: the waypoint generator's smoothing of the velocity setpoin
 LEAD = 0.5  # m: the position setpoint leads the vehicle at most this much
 DIRECT_RADIUS = 3.0  # m: a free waypoint this close is handed back to PX4's own trajectory
 CLEARANCE = 1.0  # m: the speed falls to zero this close to an obstacle in the chosen direction
+COMMIT = 0.7  # m/s
 COST_JITTER = 0.03  # relative per-frame cost noise (point-cloud noise)
 
 
@@ -289,7 +290,12 @@ class LocalPlanner:
             self._hand_back()
             return
         prev = self.prev_goal if self.prev_goal is not None else (x, y)
-        cost, _ = costs(hist, x, y, vx, vy, (gx, gy), prev, self.params, cam.max_range)
+        # the velocity term: the vehicle's velocity, or while it hovers (turning towards a new
+        # direction) the direction it was last sent, at COMMIT speed (commitment, calibrated)
+        cvx, cvy = vx, vy
+        if math.hypot(vx, vy) < COMMIT and self.direction == self.direction:
+            cvx, cvy = COMMIT * math.cos(self.direction), COMMIT * math.sin(self.direction)
+        cost, _ = costs(hist, x, y, cvx, cvy, (gx, gy), prev, self.params, cam.max_range)
         gauss = self.rng.gauss
         best, best_cost = 0, math.inf
         for i, c in enumerate(cost):
