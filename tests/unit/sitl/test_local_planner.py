@@ -38,6 +38,7 @@ from uavtest.spec.models import Avoidance, Home, Obstacle, UavTestSpec
 
 from .conftest import competition
 
+
 #: the two sample obstacles of the competition's snippets/case_studies/README.md
 def _box(length: float, w: float, h: float, x: float, y: float) -> Obstacle:
     size = {"l": length, "w": w, "h": h}
