@@ -82,5 +82,5 @@ class ProgressWatch:
         if now_ms - self.since_ms >= self.after_ms:
             self.blocked = (
                 f"blocked: no progress toward mission item {seq} for {self.after_ms / 1000:g} s "
-                f"(closest {self.best:.1f} m, now {d:.1f} m away)"
+                f"({d:.1f} m away)"
             )
