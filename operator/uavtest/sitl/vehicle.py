@@ -116,7 +116,8 @@ class Vehicle:
         self.config = config
         seed = config.seed
         variation = random.Random(f"{seed}:vehicle")
-        planner = config.avoidance is Avoidance.LOCAL_PLANNER
+        # PX4-Avoidance's local planner: the test's avoidance, or COM_OBS_AVOID 1 among its params
+        planner = config.avoidance is Avoidance.LOCAL_PLANNER or config.params.get("COM_OBS_AVOID") == 1
         self.params = ParamStore({**config.params, "COM_OBS_AVOID": 1} if planner else config.params)
         self.proj = Projection(config.home.lat, config.home.lon)
         self.home_alt = config.home.alt
