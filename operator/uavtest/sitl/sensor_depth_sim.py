@@ -22,7 +22,7 @@ __all__ = ["DepthCamera"]
 HFOV_DEG = 86.0  # horizontal field of view of the simulated depth camera
 MAX_RANGE = 15.0  # m: PX4-Avoidance max_sensor_range_ (points beyond are discarded)
 MIN_RANGE = 0.2  # m: min_sensor_range_
-COLUMNS = 29  # rays across the field of view (3 deg apart: twice the histogram's 6 deg resolution)
+COLUMNS = 21  # rays across the field of view (4.3 deg apart, finer than the histogram's 6 deg bins)
 DEPTH_NOISE = 0.002  # 1/m: depth standard deviation = DEPTH_NOISE * range^2 (stereo depth error)
 DROPOUT = 0.03  # fraction of pixels without depth
 
