@@ -301,7 +301,7 @@ class ReplicaCore:
         if self.stage is Stage.FLIGHT:
             self.monitor.on_position(p)
             flying = self._in_mission and self.armed and self.monitor.airborne
-            self.progress.on_position(p.x, p.y, p.time_ms, flying)
+            self.progress.on_position(p.x, p.y, p.z, p.time_ms, flying)
             if not self.lockstep:
                 return self._flight_step(wall)
             return []

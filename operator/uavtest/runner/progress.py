@@ -7,7 +7,8 @@ runner ends such a flight early, as ``blocked``.
 
 The next waypoint is the first mission item with a horizontal position (waypoint, loiter, land)
 after the last item the vehicle reported reached (MISSION_ITEM_REACHED). Progress is a new
-closest approach, ``PROGRESS_M`` closer than the previous one. Blocked: no progress for
+closest approach, ``PROGRESS_M`` closer than the previous one, in 3-D (a long climb to the
+waypoint's altitude is progress too; a land item counts horizontally). Blocked: no progress for
 ``BLOCKED_AFTER_S`` seconds of vehicle time while armed, airborne and in mission mode, still
 farther than ``NEAR_M`` from the waypoint (holding at a waypoint — a loiter time, the turn
 towards the next leg — is not being blocked). PX4-Avoidance's slowest recoveries seen in the
@@ -33,15 +34,23 @@ NEAR_M = 3.0
 #: NAV_LOITER_TIME, NAV_LAND, NAV_LOITER_TO_ALT
 _PLACES = frozenset({16, 17, 18, 19, 21, 31})
 _GLOBAL_FRAMES = frozenset({0, 3, 5, 6, 10, 11})
+_RELATIVE_FRAMES = frozenset({3, 6})  # altitude above home (0, 5: above mean sea level)
+_LAND = 21
 
 
-def mission_places(items: Sequence[MissionItemInt], home: Home) -> dict[int, tuple[float, float]]:
-    """seq → (north, east) metres from home of the items that fly to a horizontal position."""
-    out: dict[int, tuple[float, float]] = {}
+def mission_places(items: Sequence[MissionItemInt], home: Home) -> dict[int, tuple[float, float, float]]:
+    """seq → (north, east, down) metres from home of the items that fly to a horizontal position
+    (down NaN: not checked, for a land item and terrain frames)."""
+    out: dict[int, tuple[float, float, float]] = {}
     for item in items:
         if item.command in _PLACES and item.frame in _GLOBAL_FRAMES and (item.x or item.y):
             n, e = geodetic_to_ned(item.x / 1e7, item.y / 1e7, home.lat, home.lon)
-            out[item.seq] = (float(n), float(e))
+            down = math.nan
+            if item.command != _LAND and item.frame in _RELATIVE_FRAMES:
+                down = -item.z
+            elif item.command != _LAND and item.frame in (0, 5):
+                down = home.alt - item.z
+            out[item.seq] = (float(n), float(e), down)
     return out
 
 
@@ -68,13 +77,13 @@ class ProgressWatch:
             self.reached = seq
             self.best, self.since_ms = math.inf, None
 
-    def on_position(self, x: float, y: float, now_ms: int, flying_mission: bool) -> None:
+    def on_position(self, x: float, y: float, z: float, now_ms: int, flying_mission: bool) -> None:
         seq = self.target()
         if seq is None or not flying_mission or self.blocked is not None:
             self.best, self.since_ms = math.inf, None
             return
-        tx, ty = self.places[seq]
-        d = math.hypot(tx - x, ty - y)
+        tx, ty, tz = self.places[seq]
+        d = math.hypot(tx - x, ty - y, 0.0 if tz != tz else tz - z)
         if self.since_ms is None or d <= NEAR_M or d < self.best - PROGRESS_M:
             self.best = min(self.best, d)
             self.since_ms = now_ms

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from uavtest.analysis.geometry import distances_to_obstacles
+from uavtest.analysis.verdict import simulator_warnings
 from uavtest.runner.events import MissionItemInt
 from uavtest.runner.progress import ProgressWatch
 from uavtest.sitl.inprocess import Flight, fly_mission
@@ -34,7 +35,7 @@ from uavtest.sitl.simulator_sih import World
 from uavtest.sitl.vehicle import SimConfig
 from uavtest.spec.loaders import load_test_text
 from uavtest.spec.mission import mission_items
-from uavtest.spec.models import Avoidance, Home, Obstacle, UavTestSpec
+from uavtest.spec.models import Avoidance, Home, Obstacle, Simulator, UavTestSpec
 
 from .conftest import competition
 
@@ -140,27 +141,31 @@ def test_progress_watch_calls_a_hover_far_from_the_waypoint_blocked_after_a_minu
     home = Home(lat=47.0, lon=8.0, alt=0.0)
     items = [
         MissionItemInt(0, 6, 22, z=10.0),
-        MissionItemInt(1, 6, 16, x=int(47.0004 * 1e7), y=int(8.0 * 1e7), z=10.0),  # ~44 m north
+        MissionItemInt(1, 6, 16, x=int(47.0004 * 1e7), y=int(8.0 * 1e7), z=100.0),  # ~44 m north, 100 m up
     ]
     watch = ProgressWatch(items, home)
     watch.on_reached(0)
     for k in range(59):  # 59 s in front of a wall, 20 m short
-        watch.on_position(24.0 + 0.3 * (k % 2), 0.0, 10_000 + k * 1000, True)
+        watch.on_position(24.0 + 0.3 * (k % 2), 0.0, -100.0, 10_000 + k * 1000, True)
     assert watch.blocked is None
-    watch.on_position(24.0, 2.0, 70_000, True)
+    watch.on_position(24.0, 2.0, -100.0, 70_000, True)
     assert watch.blocked is not None and watch.blocked.startswith(
         "blocked: no progress toward mission item 1"
     )
     moving = ProgressWatch(items, home)
     moving.on_reached(0)
     for k in range(120):  # slow but steady: a metre every 3 s
-        moving.on_position(k / 3.0, 0.0, k * 1000, True)
+        moving.on_position(k / 3.0, 0.0, -100.0, k * 1000, True)
     assert moving.blocked is None
     holding = ProgressWatch(items, home)
     holding.on_reached(0)
     for k in range(120):  # not in mission mode (hold): never blocked
-        holding.on_position(5.0, 0.0, k * 1000, False)
+        holding.on_position(5.0, 0.0, -10.0, k * 1000, False)
     assert holding.blocked is None
+    climbing = ProgressWatch(items, home)
+    for k in range(200):  # a 100 m takeoff climb at 0.5 m/s: no horizontal progress, yet progress
+        climbing.on_position(0.0, 0.0, -k * 0.5, k * 1000, True)
+    assert climbing.blocked is None
 
 
 # ---------------------------------------------------------------------- flights
@@ -221,10 +226,10 @@ def test_a_wall_blocks_the_planner_and_the_progress_watch_says_so() -> None:
     watch = ProgressWatch(
         [MissionItemInt(0, 6, 22, z=10.0), MissionItemInt(1, 6, 16, z=10.0)], Home(lat=0.0, lon=0.0, alt=0.0)
     )
-    watch.places[1] = (50.0, 0.0)
+    watch.places[1] = (50.0, 0.0, -10.0)
     watch.on_reached(0)
     for t, x, y, z in flight.samples:
-        watch.on_position(x, y, round(t * 1000), -z > 5.0)
+        watch.on_position(x, y, z, round(t * 1000), -z > 5.0)
     assert watch.blocked is not None
 
 
@@ -234,3 +239,10 @@ def test_without_avoidance_the_same_box_is_a_collision() -> None:
     assert flight.vehicle is not None and flight.vehicle.crashed
     flight, _, dmin = _fly(_north_mission(box), 0)
     assert flight.vehicle is not None and not flight.vehicle.crashed and dmin > 0.5
+
+
+def test_px4_sitl_says_it_flies_without_the_local_planner() -> None:
+    spec = _north_mission(())
+    px4 = spec.model_copy(update={"vehicle": spec.vehicle.model_copy(update={"simulator": Simulator.PX4})})
+    assert any("without PX4-Avoidance" in w for w in simulator_warnings(px4))
+    assert simulator_warnings(spec) == []  # the built-in simulator flies it
