@@ -130,15 +130,16 @@ class Vehicle:
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed)
-        if planner:  # PX4-Avoidance's local planner flies the auto modes' waypoints (COM_OBS_AVOID 1)
-            camera = DepthCamera(self.world, random.Random(f"{seed}:depth"))
-            cruise = PlannerParams(cruise=self.params["MPC_XY_CRUISE"])
-            self.sim.planner = LocalPlanner(camera, random.Random(f"{seed}:local_planner"), cruise)
         land_jitter = variation.uniform(0.0, 0.8)
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
         self.land = LandDetector(self.params, self.ctrl, land_jitter)
         self.nav = Navigator(self.params, self.proj, self.home_alt, random.Random(f"{seed}:navigator"))
+        if planner:  # PX4-Avoidance's local planner flies the auto modes' waypoints (COM_OBS_AVOID 1)
+            camera = DepthCamera(self.world, random.Random(f"{seed}:depth"))
+            cruise = PlannerParams(cruise=self.params["MPC_XY_CRUISE"])
+            self.sim.planner = LocalPlanner(camera, random.Random(f"{seed}:local_planner"), cruise)
+            self.nav.yaw_acceptance = False
         self.param_proto = ParamProtocol(self.params)
         self.mission_proto = MissionProtocol()
         self.link_names = [name for name, _ in config.links]
