@@ -184,6 +184,7 @@ class LocalPlanner:
         self.sp: tuple[float, float] | None = None
         self.direction = math.nan  # the chosen azimuth (radians), for tests and plots
         self.direct = Goal(GoalKind.POSITION)
+        self.goal = self.direct  # the navigator's latest goal (its setpoint triplet in the log)
         self.out = Goal(GoalKind.OFFBOARD)
 
     def reset(self) -> None:
@@ -209,6 +210,7 @@ class LocalPlanner:
         goal: Goal,
     ) -> Goal:
         """The goal PX4's position control flies instead of ``goal`` (unchanged unless a waypoint)."""
+        self.goal = goal
         if goal.kind is not GoalKind.POSITION:
             self.reset()
             return goal

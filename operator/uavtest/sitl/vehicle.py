@@ -654,7 +654,8 @@ class Vehicle:
                     t, (c.px, c.py, c.pz), (c.vx, c.vy, c.vz), (c.ax, c.ay, 0.0), c.yaw_sp, c.yawrate_sp
                 )
             )
-            self._log_setpoint(t, self.goal)
+            planner = self.sim.planner  # the triplet is the navigator's, whatever avoidance flies
+            self._log_setpoint(t, self.goal if planner is None or not planner.active else planner.goal)
         commander = self.commander
         if commander.status_dirty or tick % (CONTROL_EVERY * 50) == 0:  # on change, else 1 Hz
             commander.status_dirty = False
