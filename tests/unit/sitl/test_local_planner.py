@@ -246,3 +246,24 @@ def test_px4_sitl_says_it_flies_without_the_local_planner() -> None:
     px4 = spec.model_copy(update={"vehicle": spec.vehicle.model_copy(update={"simulator": Simulator.PX4})})
     assert any("without PX4-Avoidance" in w for w in simulator_warnings(px4))
     assert simulator_warnings(spec) == []  # the built-in simulator flies it
+
+
+def test_competition_failing_layout_hesitates_and_soft_fails(shared_data: Path) -> None:
+    """``mission2-failing.png``: a box across mission2's outbound leg (x -10..-2.5, y 15..20) and
+    one right of it (x 5.5..13). The competition's replicas go round the left box's far side
+    (x about -13 at y = 17.5), come close, and take very different times (hesitation)."""
+    boxes = (_box(7.5, 5, 20, -6.25, 17.5), _box(7.5, 5, 20, 9.25, 17.5))
+    times, dmins, sides = [], [], []
+    for seed in range(10):
+        config, items = competition(shared_data, 2, seed, Avoidance.LOCAL_PLANNER)
+        flight = fly_mission(dataclasses.replace(config, obstacles=boxes), items)
+        assert flight.vehicle is not None and not flight.vehicle.crashed
+        assert flight.flight_time is not None
+        times.append(flight.flight_time)
+        s = np.array(flight.samples)
+        dmins.append(float(distances_to_obstacles(s[:, 1], s[:, 2], s[:, 3], boxes).min()))
+        outbound = next(s[i, 1] for i in range(1, len(s)) if s[i - 1, 2] < 17.5 <= s[i, 2])
+        sides.append(outbound)
+    assert all(x < -10.0 for x in sides), sides  # round the far side of the left box
+    assert max(times) - min(times) > 15.0, times  # hesitation differs from replica to replica
+    assert sum(d < 1.5 for d in dmins) >= 5, dmins  # mostly soft fails
