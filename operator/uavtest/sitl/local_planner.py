@@ -20,7 +20,8 @@ goal through ``LocalPlanner.update``; the facts carried over from PX4-Avoidance'
 - an empty histogram flies straight to the waypoint (the waypoint generator's DIRECT state);
 - speed: the competition's own flights of the plain plans (``mission1.png`` .. ``mission3.png``)
   go about 1.3 m/s along the legs, slower (about 1 m/s) with an obstacle in view of the goal
-  direction; throttled when the chosen direction is off the camera's axis (``adaptSpeed``: to
+  direction (a real PX4 v1.12 + PX4-Avoidance flight, Surrealist's ``m0.ulg``, COM_OBS_AVOID 1,
+  MPC_XY_CRUISE 5: 1.5 m/s along its leg, 1.0-1.2 m/s at the widest point of its detour); throttled when the chosen direction is off the camera's axis (``adaptSpeed``: to
   zero at half the field of view, so the vehicle first turns, then goes) and when the chosen
   direction's obstacle is close.
 
