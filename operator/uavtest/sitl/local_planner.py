@@ -21,9 +21,10 @@ goal through ``LocalPlanner.update``; the facts carried over from PX4-Avoidance'
 - speed: the competition's own flights of the plain plans (``mission1.png`` .. ``mission3.png``)
   go about 1.3 m/s along the legs, slower (about 1 m/s) with an obstacle in view of the goal
   direction (a real PX4 v1.12 + PX4-Avoidance flight, Surrealist's ``m0.ulg``, COM_OBS_AVOID 1,
-  MPC_XY_CRUISE 5: 1.5 m/s along its leg, 1.0-1.2 m/s at the widest point of its detour); throttled when the chosen direction is off the camera's axis (``adaptSpeed``: to
-  zero at half the field of view, so the vehicle first turns, then goes) and when the chosen
-  direction's obstacle is close.
+  MPC_XY_CRUISE 5: 1.5 m/s along its leg, 1.0-1.2 m/s at the widest point of its detour);
+  throttled when the chosen direction is off the camera's axis (``adaptSpeed``: to zero at half
+  the field of view, so the vehicle first turns, then goes) and when the chosen direction's
+  obstacle is close.
 
 Seeded noise (depth noise and dropped pixels, the planner's frame timing, a per-replica speed
 factor, a small per-frame cost jitter standing for point-cloud noise) makes replicas differ as
@@ -64,7 +65,10 @@ ACCEL = 1.5  # m/s^2: the waypoint generator's smoothing of the velocity setpoin
 LEAD = 0.5  # m: the position setpoint leads the vehicle at most this much
 DIRECT_RADIUS = 3.0  # m: a free waypoint this close is handed back to PX4's own trajectory
 CLEARANCE = 1.0  # m: the speed falls to zero this close to an obstacle in the chosen direction
-COMMIT = 0.7  # m/s
+#: m/s: while the vehicle hovers (turning towards a new direction) the velocity cost uses the
+#: direction it was last sent at this speed; without it the choice flips sides every frame in
+#: front of any box (calibrated: the star planner's tree gives PX4 that commitment)
+COMMIT = 0.7
 COST_JITTER = 0.1  # relative per-frame cost noise, +-5 % (point-cloud noise)
 
 
@@ -298,8 +302,7 @@ class LocalPlanner:
             self._hand_back()
             return
         prev = self.prev_goal if self.prev_goal is not None else (x, y)
-        # the velocity term: the vehicle's velocity, or while it hovers (turning towards a new
-        # direction) the direction it was last sent, at COMMIT speed (commitment, calibrated)
+        # the velocity term: the vehicle's velocity, or while it hovers the last direction (COMMIT)
         cvx, cvy = vx, vy
         if math.hypot(vx, vy) < COMMIT and self.direction == self.direction:
             cvx, cvy = COMMIT * math.cos(self.direction), COMMIT * math.sin(self.direction)
