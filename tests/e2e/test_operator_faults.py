@@ -195,6 +195,11 @@ def test_a_schedule_of_every_minute_across_an_operator_restart_skips_and_duplica
     runs = runs_of(cluster, namespace, name)
     finished = [r for r in runs if r.get("status", {}).get("phase") in ("Succeeded", "Failed", "Error")]
     assert len(finished) <= 2, [r["metadata"]["name"] for r in runs]  # 1 kept + 1 not trimmed yet
+    # the metrics summarise the kept runs: a hover always passes, so its flaky-rate over them is 0
+    labels = {"test_namespace": namespace, "test": name}
+    assert operator.metric("uavtest_test_flaky_rate", **labels) == 0.0
+    kept = operator.metric("uavtest_test_kept_runs", result="succeeded", **labels)
+    assert kept is not None and 1 <= kept <= 2, kept
 
 
 def _plus_minutes(stamp: str, n: int) -> str:

@@ -100,6 +100,7 @@ class Limits:
     err_max: float
     hold_dz: float
     yaw_mode: int
+    acc_rad: float
 
     @classmethod
     def of(cls, p: ParamStore) -> Limits:
@@ -136,6 +137,7 @@ class Limits:
             err_max=max(p["MPC_XY_ERR_MAX"], 0.1),
             hold_dz=p["MPC_HOLD_DZ"],
             yaw_mode=int(p["MPC_YAW_MODE"]),
+            acc_rad=p["NAV_ACC_RAD"],
         )
 
 
@@ -261,8 +263,10 @@ class Controller:
             self._z_reference(dt, goal.z)
             target_yaw = goal.yaw
             if math.isnan(target_yaw) and lim.yaw_mode == 0:
+                # FlightTaskAuto: heading towards the target while outside the acceptance
+                # radius, locked inside it
                 d = math.hypot(goal.x - x, goal.y - y)
-                if d > 1.0:
+                if d >= lim.acc_rad:
                     target_yaw = math.atan2(goal.y - y, goal.x - x)
             ax, ay = self._xy_loops(dt, x, y, vx, vy)
             az = self._z_loops(dt, z, vz, True)

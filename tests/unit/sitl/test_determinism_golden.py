@@ -186,29 +186,30 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
     "params_and_commands": params_and_commands,
 }
 
-#: (ulog sha256, messages sha256) per scenario, recorded from the pre-split vehicle; re-recorded
-#: when COM_OBS_AVOID became a modelled parameter (one more parameter in every ULog and in the
-#: parameter list; every flight's messages unchanged).
+#: (ulog sha256, messages sha256) per scenario; re-recorded for issue 10's PX4-like flight (smooth
+#: EKF2-like estimator error, FlightTaskAuto heading lock inside NAV_ACC_RAD, move-to-land altitude),
+#: and when COM_OBS_AVOID became a modelled parameter (one more parameter in every ULog and in the
+#: parameter list; the flights' messages unchanged).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "059a9112864607f293dbdbf5705d13f306df5538bfba72eee89f07d4435455d4",
-        "beb8e0ede2a16c1093324a0c39357b1d5ee42daa22ff814584fe8e60fb76a1b1",
+        "adc888ff23a3e4fda5839f1926424764f686fbf7e666bbf9d3d6123fd5084782",
+        "0b9abc5eaab4d6202c69e3129c77baa0248b15fd34acd028d810323fb1a8530b",
     ),
     "manual_and_rtl": (
-        "3da64a5a74a2a09c32ee40f7da40062de33253c1dae95a34a47cbb8f89e8028e",
-        "d3f42d35da3db1c05a074d11376f6bed32b8409df6644abdd00305178405cfcf",
+        "d0c23185e2113899fe317479a46c232e2d973a32962ad717fa71c4f7941f5f7b",
+        "c27fe59442b7d67f3c89e17dcfa56dad42fcbb3ff1dcd1d7813c974305364c6d",
     ),
     "datalink_loss": (
-        "af77e2fa9d6a2619bd392ce4b0e088a6312f52a8839972880675c76580501384",
-        "382d82a89cacd76c9a59f81d18274c09e03a7043b1ab2a767292b88365fbf028",
+        "fbee25d21cf7e1a2566332493776b3791b17358eb32bb0a925aca87197c17e2d",
+        "9fca5a2c8029a328adf83633b0d1b2d73e61d6c4f7af9fd3e6eacb1db8406ee6",
     ),
     "crash": (
-        "822254c3dc3a1889a322d5ef664a6fe1a36eff6916936337574b5b3d2003e745",
-        "e14d716a5563d41314127c1edfdbcc613b784a3efd9790739850a0b86a69c1e3",
+        "4415d0047d54ce92d2d5cbadd2af56c275421cdd71b062f062285dc403af11da",
+        "9a91c05b7a0afb75c8e51608e88e88c7d4f22e43289ca5680a5351443ec0603e",
     ),
     "params_and_commands": (
-        "673020ec6d150e7c3792f9f9630b53a280d41108dcc4e61b73af02aa127f4c0e",
-        "9d82bbf91ddc440c9581a4d1b3bab69901ba8b5290d20d292df48dbbdda2c34b",
+        "c6d53d652eac081bcbcf3fa7467d179525568ac83d1208131b82ad3fdf76dce3",
+        "4f00135ba99a04224b1ef2fe6d45e25e21d3ea3f20df049ab9193a0aed93576e",
     ),
 }
 

@@ -380,7 +380,11 @@ class Navigator:
                         Event(EventKind.TEXT, (MavSeverity.INFO, f"Climb to {-s.z:.1f} meters above home"))
                     )
                 elif cmd == MavCmd.NAV_LAND:
-                    s.z = st.z
+                    # MissionBase::handleLanding MOVE_TO_LAND: at the current position setpoint's
+                    # altitude (the previous item's), else the current altitude
+                    prev = self._goal
+                    held = prev.kind in (GoalKind.POSITION, GoalKind.TAKEOFF) and not st.landed
+                    s.z = prev.z if held else st.z
                     s.phase = Phase.FLY
                 elif st.landed:
                     s.extra.update(after_takeoff=1.0, tx=st.x, ty=st.y)

@@ -1,0 +1,170 @@
+"""How PX4-like the built-in simulator flies: the same plans as the PX4 v1.15 SIH flights in
+``../shared/data/px4-sih``, flown in-process over N seeds, measured like PX4 against itself.
+
+For each plan: every built-in flight against every PX4 flight ("built-in vs PX4"), next to every
+pair of PX4 flights of that plan ("PX4 vs PX4": PX4's own run-to-run range) and every pair of
+built-in flights ("built-in vs built-in": the replicas' spread). Each flight is measured from
+its lift-off point and resampled onto normalised time (``uavtest.analysis.fidelity``). Avoidance
+is off (the PX4 SIH flights had none). Target: every built-in-vs-PX4 mean inside PX4's range.
+
+Plans: the competition's mission1 and mission2 (``competition/snippets/case_studies``, their
+``mission-params.csv``), PX4 logs run1-3 and sf1; and ``square-mission`` rebuilt from the data
+README (MIS_TAKEOFF_ALT 5, MPC_XY_CRUISE 8; takeoff to 10 m, 30 m north, 30 m east, land there),
+one PX4 log, so no PX4-vs-PX4 range.
+
+    python bench/bench_fidelity.py [--seeds 25] [--plans mission1,mission2,square]
+"""
+
+from __future__ import annotations
+
+import argparse
+import io
+import os
+import statistics
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from pyulog import ULog
+from rich.console import Console
+from rich.table import Table
+
+from uavtest.analysis.fidelity import (
+    FIGURES,
+    FlightFigures,
+    flight_figures,
+    pairs_between,
+    pairs_within,
+    spread,
+)
+from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
+from uavtest.sitl.geo import Projection
+from uavtest.sitl.inprocess import fly_mission
+from uavtest.sitl.mav import MavCmd, MavFrame
+from uavtest.sitl.mission import NavItem, from_spec
+from uavtest.sitl.recorder import MemorySink
+from uavtest.sitl.vehicle import SimConfig
+from uavtest.spec.loaders import load_test
+from uavtest.spec.mission import mission_items
+from uavtest.spec.models import Home
+
+REPO = Path(__file__).resolve().parent.parent
+SHARED = Path(os.environ.get("UAVTEST_SHARED_DATA", REPO.parent / "shared" / "data"))
+PX4_SIH = SHARED / "px4-sih"
+CASES = SHARED / "competition" / "snippets" / "case_studies"
+
+Plan = Callable[[int], tuple[SimConfig, list[NavItem]]]
+
+
+def competition(n: int) -> Plan:
+    test = load_test(CASES / f"mission{n}.yaml")
+    items = from_spec(mission_items(test.spec))
+    return lambda seed: (SimConfig.from_spec(test.spec, seed), items)
+
+
+def square(seed: int) -> tuple[SimConfig, list[NavItem]]:
+    home = Home()
+    proj = Projection(home.lat, home.lon)
+    rel = MavFrame.GLOBAL_RELATIVE_ALT_INT
+
+    def at(seq: int, cmd: int, north: float, east: float, alt: float) -> NavItem:
+        lat, lon = proj.reproject(north, east)
+        return NavItem(seq, cmd, rel, x=round(lat * 1e7), y=round(lon * 1e7), z=alt)
+
+    items = [
+        at(0, MavCmd.NAV_TAKEOFF, 0.0, 0.0, 10.0),
+        at(1, MavCmd.NAV_WAYPOINT, 30.0, 0.0, 10.0),
+        at(2, MavCmd.NAV_WAYPOINT, 30.0, 30.0, 10.0),
+        at(3, MavCmd.NAV_LAND, 30.0, 30.0, 0.0),
+    ]
+    params = {"MIS_TAKEOFF_ALT": 5.0, "MPC_XY_CRUISE": 8.0}
+    return SimConfig(home=home, params=params, seed=seed), items
+
+
+PLANS: dict[str, tuple[Plan | None, list[str]]] = {
+    "mission1": (None, [f"competition-mission1-{r}.ulg" for r in ("run1", "run2", "run3", "sf1")]),
+    "mission2": (None, [f"competition-mission2-{r}.ulg" for r in ("run1", "run2", "run3", "sf1")]),
+    "square": (square, ["square-mission.ulg"]),
+}
+
+
+def px4_flights(names: list[str]) -> list[FlightFigures]:
+    return [flight_figures(trajectory_from_ulog(read_ulog(PX4_SIH / name))) for name in names]
+
+
+def builtin_flights(plan: Plan, seeds: int) -> tuple[list[FlightFigures], float]:
+    out = []
+    start = time.perf_counter()
+    for seed in range(seeds):
+        config, items = plan(seed)
+        sink = MemorySink()
+        fly_mission(config, items, sink=sink)
+        out.append(flight_figures(trajectory_from_ulog(ULog(io.BytesIO(sink.logs[0])))))
+    return out, time.perf_counter() - start
+
+
+def table(name: str, px4: list[FlightFigures], ours: list[FlightFigures]) -> tuple[Table, bool]:
+    t = Table(title=f"{name}: built-in ({len(ours)} seeds) vs PX4 v1.15 SIH ({len(px4)} runs)")
+    t.add_column("figure")
+    t.add_column("PX4 vs PX4", justify="right")
+    t.add_column("built-in vs PX4", justify="right")
+    t.add_column("built-in vs built-in", justify="right")
+    t.add_column("inside PX4's range", justify="center")
+    ok = True
+    px4_pairs, between, within = pairs_within(px4), pairs_between(ours, px4), pairs_within(ours)
+    for attr, label, unit in FIGURES:
+        theirs = spread([getattr(p, attr) for p in px4_pairs]) if px4_pairs else None
+        cross = spread([getattr(p, attr) for p in between])
+        own = spread([getattr(p, attr) for p in within]) if within else None
+        inside = "—" if theirs is None else ("yes" if cross.inside(theirs) else "[red]no[/red]")
+        ok &= theirs is None or cross.inside(theirs)
+        t.add_row(f"{label}, {unit}", str(theirs or "—"), str(cross), str(own or "—"), inside)
+    ft_px4 = spread([f.flight_time for f in px4])
+    ft_ours = spread([f.flight_time for f in ours])
+    t.add_row("flight time, s (PX4 / built-in)", str(ft_px4), str(ft_ours), "", "")
+    t.add_row(
+        "flight-time spread (max − min), s",
+        f"{ft_px4.high - ft_px4.low:.1f}",
+        f"{ft_ours.high - ft_ours.low:.1f}",
+        "",
+        "",
+    )
+    jit_px4 = spread([f.jitter for f in px4])
+    jit_ours = spread([f.jitter for f in ours])
+    t.add_row("velocity jitter (10 Hz diff vs 1 s mean), m/s", str(jit_px4), str(jit_ours), "", "")
+    return t, ok
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--seeds", type=int, default=25)
+    parser.add_argument("--plans", default="mission1,mission2,square")
+    args = parser.parse_args()
+    if not PX4_SIH.is_dir():
+        raise SystemExit(f"{PX4_SIH} not found (set UAVTEST_SHARED_DATA to the real data folder)")
+    console = Console(width=150)
+    all_ok = True
+    for name in args.plans.split(","):
+        if name not in PLANS:
+            raise SystemExit(f"unknown plan {name!r}: allowed {', '.join(PLANS)}")
+        plan, logs = PLANS[name]
+        if plan is None:
+            plan = competition(int(name[-1]))
+        px4 = px4_flights(logs)
+        ours, wall = builtin_flights(plan, args.seeds)
+        t, ok = table(name, px4, ours)
+        all_ok &= ok or len(px4) < 2
+        console.print(t)
+        per = statistics.mean(f.flight_time for f in ours)
+        console.print(f"  {args.seeds} built-in flights in {wall:.1f} s wall ({per:.0f} s flight each)\n")
+    console.print(
+        "every built-in-vs-PX4 mean inside PX4's run-to-run range" if all_ok else "[red]not all inside[/red]"
+    )
+    sys.exit(0 if all_ok else 1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,175 @@
+"""How alike two flights of the same plan are, in path and in time: the figures of the fidelity bench.
+
+Each flight is measured from its lift-off point (``from_liftoff``): PX4's local origin is the
+EKF origin and SIH logs sit about a metre off the ground at rest, so positions are taken
+relative to where the vehicle was when it lifted off (the ground below it for the altitude), and
+time from the moment it lifted off. Both flights are then resampled onto normalised time
+(``NORMALISED_POINTS`` points from lift-off to landing), which compares *where along the path,
+when*, whatever the flights' durations:
+
+- ``dtw``: DTW per point (metres) between the resampled paths: the path's shape;
+- ``mean_distance``: mean distance at equal normalised time (metres): the shape and the timing;
+- ``speed_error``: mean absolute difference of ground speed at equal normalised time (m/s);
+- ``altitude_error``: mean absolute difference of altitude at equal normalised time (metres);
+- ``flight_time``: lift-off to landing (seconds), per flight;
+- ``jitter``: per flight, the RMS of the horizontal velocity from 10 Hz position differences
+  around its 1 s moving average (m/s): white noise on a logged position shows here (PX4's EKF2
+  output is smooth: a few cm/s).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+
+from uavtest.analysis.similarity import dtw_points
+from uavtest.analysis.trajectory import Trajectory
+from uavtest.errors import BadInput
+
+__all__ = [
+    "FIGURES",
+    "LIFTOFF_RISE",
+    "NORMALISED_POINTS",
+    "FlightFigures",
+    "PairFigures",
+    "Spread",
+    "compare",
+    "flight_figures",
+    "from_liftoff",
+    "normalised",
+    "pairs_between",
+    "pairs_within",
+    "spread",
+]
+
+NORMALISED_POINTS = 200
+LIFTOFF_RISE = 0.3  # m above the altitude at the start of the flight window: lifted off
+JITTER_RATE = 10.0  # Hz
+JITTER_WINDOW = 1.0  # s
+
+#: the pair figures, in table order: attribute, label, unit
+FIGURES: tuple[tuple[str, str, str], ...] = (
+    ("dtw", "DTW per point (path shape)", "m"),
+    ("mean_distance", "mean distance at equal normalised time", "m"),
+    ("speed_error", "speed-profile error (mean |Δ speed|)", "m/s"),
+    ("altitude_error", "altitude error (mean |Δ altitude|)", "m"),
+)
+
+
+def from_liftoff(traj: Trajectory, *, rise: float = LIFTOFF_RISE) -> Trajectory:
+    """The flight from the moment it lifted off, relative to the lift-off point.
+
+    ``traj`` is a flight window (takeoff to landing, e.g. ``trajectory_from_ulog``). Lift-off is
+    the first sample ``rise`` metres above the window's first altitude; x, y are taken relative
+    to the position there, z relative to the window's first sample (the ground), t from there.
+    """
+    if len(traj) < 2:
+        raise BadInput("a flight needs at least two samples to be measured", value=len(traj))
+    alt = traj.altitude
+    above = np.flatnonzero(alt >= alt[0] + rise)
+    if not len(above):
+        raise BadInput(f"the flight never climbed {rise} m: no lift-off", value=float(alt.max() - alt[0]))
+    i = int(above[0])
+    return Trajectory(
+        traj.t[i:] - traj.t[i],
+        traj.x[i:] - traj.x[i],
+        traj.y[i:] - traj.y[i],
+        traj.z[i:] - traj.z[0],
+        traj.heading[i:],
+    )
+
+
+def normalised(traj: Trajectory, points: int = NORMALISED_POINTS) -> np.ndarray:
+    """(points, 3) positions at equally spaced fractions of the flight's duration."""
+    if len(traj) < 2 or traj.duration <= 0:
+        raise BadInput("a flight needs a duration to be resampled onto normalised time")
+    grid = np.linspace(traj.t[0], traj.t[-1], points)
+    return np.column_stack([np.interp(grid, traj.t, a) for a in (traj.x, traj.y, traj.z)])
+
+
+@dataclass(frozen=True, slots=True)
+class FlightFigures:
+    """One flight measured from lift-off: its duration and how much its logged velocity jitters."""
+
+    flight_time: float
+    jitter: float
+    path: np.ndarray  # (NORMALISED_POINTS, 3)
+    speed: np.ndarray  # (NORMALISED_POINTS,) ground speed, m/s
+
+
+def _jitter(traj: Trajectory) -> float:
+    if traj.duration < 2 * JITTER_WINDOW:
+        return 0.0
+    r = traj.resample(JITTER_RATE)
+    v = np.hypot(np.diff(r.x), np.diff(r.y)) * JITTER_RATE
+    n = int(JITTER_WINDOW * JITTER_RATE)
+    smooth = np.convolve(v, np.ones(n) / n, mode="same")
+    core = slice(n, len(v) - n)
+    return float(np.sqrt(np.mean((v[core] - smooth[core]) ** 2))) if len(v) > 2 * n else 0.0
+
+
+def flight_figures(flight: Trajectory, points: int = NORMALISED_POINTS) -> FlightFigures:
+    """Measure one flight window (``trajectory_from_ulog``) from its lift-off."""
+    f = from_liftoff(flight)
+    path = normalised(f, points)
+    dt = f.duration / (points - 1)
+    speed = np.hypot(np.gradient(path[:, 0], dt), np.gradient(path[:, 1], dt))
+    return FlightFigures(flight_time=f.duration, jitter=_jitter(f), path=path, speed=speed)
+
+
+@dataclass(frozen=True, slots=True)
+class PairFigures:
+    """How far apart two flights are (module docstring)."""
+
+    dtw: float
+    mean_distance: float
+    speed_error: float
+    altitude_error: float
+
+
+def compare(a: FlightFigures, b: FlightFigures) -> PairFigures:
+    """The pair figures of two measured flights."""
+    return PairFigures(
+        dtw=dtw_points(a.path, b.path).per_step,
+        mean_distance=float(np.linalg.norm(a.path - b.path, axis=1).mean()),
+        speed_error=float(np.abs(a.speed - b.speed).mean()),
+        altitude_error=float(np.abs(a.path[:, 2] - b.path[:, 2]).mean()),
+    )
+
+
+def pairs_within(flights: Sequence[FlightFigures]) -> list[PairFigures]:
+    """Every pair of distinct flights (run vs run of the same simulator)."""
+    return [compare(a, b) for a, b in combinations(flights, 2)]
+
+
+def pairs_between(ours: Sequence[FlightFigures], theirs: Sequence[FlightFigures]) -> list[PairFigures]:
+    """Every flight of one set against every flight of the other."""
+    return [compare(a, b) for a in ours for b in theirs]
+
+
+@dataclass(frozen=True, slots=True)
+class Spread:
+    """Mean, minimum and maximum of one figure over flights or pairs."""
+
+    mean: float
+    low: float
+    high: float
+    n: int
+
+    def __str__(self) -> str:
+        return f"{self.mean:.2f} ({self.low:.2f}–{self.high:.2f})"
+
+    def inside(self, other: Spread) -> bool:
+        """This figure's mean lies within ``other``'s range (at most its maximum)."""
+        return self.mean <= other.high
+
+
+def spread(values: Sequence[float]) -> Spread:
+    """Mean and range of ``values``; BadInput when there are none."""
+    if not len(values):
+        raise BadInput("no values to summarise: at least one flight or pair is needed")
+    arr = np.asarray(values, dtype=np.float64)
+    return Spread(float(arr.mean()), float(arr.min()), float(arr.max()), len(arr))

@@ -1,0 +1,92 @@
+"""The fidelity figures: flights measured from lift-off on normalised time."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uavtest.analysis.fidelity import (
+    NORMALISED_POINTS,
+    compare,
+    flight_figures,
+    from_liftoff,
+    pairs_between,
+    pairs_within,
+    spread,
+)
+from uavtest.analysis.trajectory import Trajectory
+from uavtest.errors import BadInput
+
+
+def flight(
+    duration: float = 40.0,
+    *,
+    shift: tuple[float, float, float] = (0, 0, 0),
+    rate: float = 50.0,
+    noise: float = 0.0,
+    cruise: float = 10.0,
+    seed: int = 0,
+) -> Trajectory:
+    """2 s on the ground, climb to ``cruise`` m at 2 m/s, fly north at constant speed, descend."""
+    t = np.arange(0.0, duration, 1.0 / rate)
+    climb_end = 2.0 + cruise / 2.0
+    descend_start = duration - cruise / 2.0 - 1.0
+    alt = np.clip(np.minimum((t - 2.0) * 2.0, (duration - 1.0 - t) * 2.0), 0.0, cruise)
+    x = np.clip((t - climb_end) / (descend_start - climb_end), 0.0, 1.0) * 50.0
+    rng = np.random.default_rng(seed)
+    x = x + noise * rng.standard_normal(len(t))
+    return Trajectory(t + 100.0, x + shift[0], np.zeros_like(t) + shift[1], -alt + shift[2])
+
+
+def test_from_liftoff_starts_at_the_lift_off_point_and_time():
+    f = from_liftoff(flight(shift=(5.0, -3.0, -1.0)))  # the estimate sits 1 m off the ground
+    assert f.t[0] == 0.0
+    assert (f.x[0], f.y[0]) == (0.0, 0.0)
+    assert -f.z[0] == pytest.approx(0.3, abs=0.05)  # lifted off: 0.3 m above where it stood
+    assert f.duration == pytest.approx(40.0 - 2.0 - 0.15 - 0.02, abs=0.05)
+
+
+def test_from_liftoff_refuses_a_flight_that_never_climbed():
+    t = np.arange(0.0, 10.0, 0.1)
+    with pytest.raises(BadInput, match="lift-off"):
+        from_liftoff(Trajectory(t, t * 0, t * 0, t * 0))
+
+
+def test_the_same_flight_offset_in_space_and_time_compares_as_equal():
+    a = flight_figures(flight())
+    b = flight_figures(flight(shift=(2.0, 1.0, -0.8)))
+    p = compare(a, b)
+    assert p.dtw < 1e-6 and p.mean_distance < 1e-6 and p.speed_error < 1e-6 and p.altitude_error < 1e-6
+    assert a.path.shape == (NORMALISED_POINTS, 3)
+
+
+def test_a_slower_flight_of_the_same_path_differs_in_time_not_in_shape():
+    a = flight_figures(flight(40.0))
+    b = flight_figures(flight(50.0))
+    p = compare(a, b)
+    assert b.flight_time - a.flight_time == pytest.approx(10.0, abs=0.1)
+    assert p.dtw < 0.5 * p.mean_distance  # DTW forgives the timing, the equal-time distance does not
+    assert p.speed_error > 0.1
+
+
+def test_a_lower_cruise_shows_as_altitude_error():
+    p = compare(flight_figures(flight()), flight_figures(flight(cruise=8.0)))
+    assert p.altitude_error > 1.0
+
+
+def test_white_noise_on_the_position_shows_as_jitter():
+    smooth = flight_figures(flight())
+    noisy = flight_figures(flight(noise=0.05))
+    assert smooth.jitter < 0.15  # only the speed steps of the synthetic flight
+    assert noisy.jitter > smooth.jitter + 0.3
+
+
+def test_pairs_and_spread():
+    flights = [flight_figures(flight(40.0 + k)) for k in range(3)]
+    assert len(pairs_within(flights)) == 3
+    assert len(pairs_between(flights, flights[:2])) == 6
+    s = spread([1.0, 2.0, 4.0])
+    assert (s.mean, s.low, s.high, s.n) == (pytest.approx(7 / 3), 1.0, 4.0, 3)
+    assert s.inside(spread([0.5, 2.5])) and not s.inside(spread([0.5, 2.0]))
+    with pytest.raises(BadInput):
+        spread([])

@@ -1,0 +1,58 @@
+"""Sanity bounds of the fidelity figures (``bench/bench_fidelity.py`` measures them with 25 seeds).
+
+The built-in simulator flies the competition's mission1 and mission2 like PX4 v1.15 SIH flies
+them (../shared/data/px4-sih): measured from lift-off on normalised time, each built-in-vs-PX4
+figure stays within a loose multiple of PX4's own run-to-run maximum, the flight time within a
+few seconds of PX4's range, the logged position as smooth as EKF2's output, and replicas differ.
+A vehicle that misses a waypoint, cruises at the wrong altitude, hovers for half a minute or
+logs a white-noise position fails these; the bench holds the tight target.
+"""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import pytest
+from pyulog import ULog
+
+from uavtest.analysis.fidelity import FIGURES, flight_figures, pairs_between, pairs_within, spread
+from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
+from uavtest.sitl.inprocess import fly_mission
+from uavtest.sitl.recorder import MemorySink
+
+from .conftest import competition
+
+SEEDS = 6
+FIGURE_FACTOR = 2.5  # built-in vs PX4 (mean) <= this x PX4 vs PX4 (max)
+FLIGHT_TIME_MARGIN = 6.0  # s outside PX4's flight-time range
+JITTER_FACTOR = 2.0  # x PX4's velocity jitter (white noise on the position would give ~3x)
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_builtin_flies_the_competition_missions_within_loose_bounds_of_px4(shared_data: Path, n: int):
+    px4 = [
+        flight_figures(
+            trajectory_from_ulog(read_ulog(shared_data / "px4-sih" / f"competition-mission{n}-{r}.ulg"))
+        )
+        for r in ("run1", "run2", "run3", "sf1")
+    ]
+    ours = []
+    for seed in range(SEEDS):
+        config, items = competition(shared_data, n, seed=seed)
+        sink = MemorySink()
+        fly_mission(config, items, sink=sink)
+        ours.append(flight_figures(trajectory_from_ulog(ULog(io.BytesIO(sink.logs[0])))))
+    px4_pairs, cross = pairs_within(px4), pairs_between(ours, px4)
+    for attr, label, _ in FIGURES:
+        theirs = spread([getattr(p, attr) for p in px4_pairs])
+        mine = spread([getattr(p, attr) for p in cross])
+        assert mine.mean <= FIGURE_FACTOR * theirs.high, f"mission{n} {label}: {mine} vs PX4 {theirs}"
+    ft_px4 = spread([f.flight_time for f in px4])
+    ft_ours = spread([f.flight_time for f in ours])
+    assert ft_px4.low - FLIGHT_TIME_MARGIN <= ft_ours.mean <= ft_px4.high + FLIGHT_TIME_MARGIN, (
+        ft_ours,
+        ft_px4,
+    )
+    assert ft_ours.high - ft_ours.low > 0.5, "replicas with different seeds fly the same time"
+    assert spread([f.jitter for f in ours]).high <= JITTER_FACTOR * spread([f.jitter for f in px4]).high
