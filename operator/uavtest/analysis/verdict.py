@@ -29,6 +29,7 @@ from uavtest.analysis.similarity import similarity
 from uavtest.analysis.trajectory import Trajectory
 from uavtest.spec.models import (
     Assertions,
+    Avoidance,
     Command,
     CommandAction,
     FlightMode,
@@ -107,6 +108,11 @@ def simulator_warnings(spec: UavTestSpec) -> list[str]:
         out.append(
             f"PX4 SITL (SIH) has no obstacles: the {n} obstacle(s) are judged only geometrically "
             "against the trajectory; the vehicle cannot crash into them"
+        )
+    if spec.vehicle.avoidance is Avoidance.LOCAL_PLANNER:
+        out.append(
+            "PX4 SITL runs without PX4-Avoidance: vehicle.avoidance local-planner is flown only by "
+            "the built-in simulator (simulator: builtin); here the mission is flown as planned"
         )
     w = spec.world.wind
     if w.mean_speed > 0 or (w.max_speed or 0) > 0:

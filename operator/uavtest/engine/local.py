@@ -30,6 +30,7 @@ from uavtest.engine.ports import PX4_MAX_INSTANCES, PortAllocator
 from uavtest.engine.replica import DEFAULT_RETRIES, ReplicaJob, run_replica
 from uavtest.engine.speed import available_cores, px4_speed_factor, speed_factor_notice, wall_timeout
 from uavtest.errors import BadInput
+from uavtest.spec.aerialist import upstream_simulator_notice
 from uavtest.spec.models import Simulator, UavTest
 from uavtest.spec.px4_params import unmodelled_notice, unmodelled_params
 from uavtest.store import ArtifactStore
@@ -107,10 +108,8 @@ def aerialist_simulator_notice(path: Path) -> str | None:
     simulation = raw.get("simulation")
     simulator = simulation.get("simulator") if isinstance(simulation, dict) else None
     if isinstance(simulator, str) and simulator.strip().lower() in _AERIALIST_SIMULATORS:
-        return (
-            f"{path.name} asks for the '{simulator.strip()}' simulator; "
-            "uavtest flies it with its built-in simulator (uavtest sitl)"
-        )
+        name = simulator.strip()
+        return f"{path.name} asks for the '{name}' simulator; {upstream_simulator_notice(name.lower())}"
     return None
 
 

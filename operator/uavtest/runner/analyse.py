@@ -168,6 +168,9 @@ def analyse(
     )
     if report.ending is Ending.REFUSED and verdict is Verdict.PASS:
         return refused()
+    if report.ending is Ending.BLOCKED:  # the runner ended the flight: no progress in the mission
+        blocked = next((n for n in report.notes if n.startswith("blocked")), "blocked")
+        verdict, reason = Verdict.FAIL, "; ".join(r for r in (blocked, reason) if r)
     log.info("verdict %s%s", verdict, f": {reason}" if reason else "")
     return Analysis(
         ReplicaResult(

@@ -51,10 +51,11 @@ from uavtest.runner.logdownload import LogDownloader
 from uavtest.runner.mission import MissionUploader
 from uavtest.runner.monitor import FlightMonitor
 from uavtest.runner.params import ParamSetter
+from uavtest.runner.progress import ProgressWatch
 from uavtest.runner.px4 import AckResult, Autopilot, Cmd, LandedState, MavType, mode_name, result_name
 from uavtest.runner.reboot import JITTER_MS, clock_went_back, reboot_reason
 from uavtest.runner.streams import stream_requests
-from uavtest.spec.models import Command, Fault, Geofence, Home, Obstacle
+from uavtest.spec.models import Command, Fault, FlightMode, Geofence, Home, Obstacle
 
 __all__ = ["ARM_GRACE_MS", "CoreConfig", "Ending", "FlightReport", "ReplicaCore", "Stage"]
 
@@ -83,6 +84,7 @@ class Ending(StrEnum):
 
     LANDED = "landed"  # armed, flew, disarmed, no command left
     COLLISION = "collision"
+    BLOCKED = "blocked"  # in mission, no progress toward the next waypoint (uavtest.runner.progress)
     TIMEOUT = "timeout"
     REFUSED = "refused"  # the vehicle refused to arm until the runner gave up: no flight
     ERROR = "error"  # a bench fault: see FlightReport.error
@@ -159,6 +161,8 @@ class ReplicaCore:
         self.armed = False
         self.landed_state = int(LandedState.UNDEFINED)
         self.monitor = FlightMonitor(config.obstacles, config.geofence)
+        self.progress = ProgressWatch(config.mission, config.home)
+        self._in_mission = False  # the vehicle's latest heartbeat says mission mode
         self.params = ParamSetter(config.params, retry_s=config.retry_s)
         self.uploader = MissionUploader(config.mission, retry_s=config.retry_s)
         self.scheduler = CommandScheduler(
@@ -232,6 +236,7 @@ class ReplicaCore:
             return []
         if isinstance(msg, MissionItemReached):
             self.report.mission_reached.add(msg.seq)
+            self.progress.on_reached(msg.seq)
             return []
         if isinstance(msg, StatusText):
             text = f"t={self.now_ms / 1000:.2f} s: {msg.text}"
@@ -295,6 +300,8 @@ class ReplicaCore:
             return self._rebooted(p.time_ms, wall)
         if self.stage is Stage.FLIGHT:
             self.monitor.on_position(p)
+            flying = self._in_mission and self.armed and self.monitor.airborne
+            self.progress.on_position(p.x, p.y, p.z, p.time_ms, flying)
             if not self.lockstep:
                 return self._flight_step(wall)
             return []
@@ -312,6 +319,7 @@ class ReplicaCore:
             state = "armed" if hb.armed else "disarmed"
             log.info("vehicle %d/%d: %s, %s", hb.sysid, hb.compid, mode_name(hb.custom_mode), state)
         self.report.vehicle = hb
+        self._in_mission = mode_name(hb.custom_mode) == FlightMode.MISSION.value
         if hb.armed and not self.armed:
             self._armed_at_ms = self.now_ms
         elif self.armed and not hb.armed:
@@ -481,6 +489,9 @@ class ReplicaCore:
                 f"collision at t={c.time_ms / 1000:.2f} s, NED ({c.x:.2f}, {c.y:.2f}, {c.z:.2f})"
             )
             return out + self._settle(Ending.COLLISION, wall)
+        if self.progress.blocked is not None and self.armed:
+            rep.notes.append(self.progress.blocked)
+            return out + self._settle(Ending.BLOCKED, wall)
         # landed: disarmed after arming, nothing left to do (a heartbeat from before the arming,
         # arriving after its ACK, must not end the flight: hence the grace after arming). Without
         # lockstep, only once the vehicle clock moved on after the disarm: a rebooted vehicle is

@@ -29,6 +29,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "COM_DISARM_LAND": (FLOAT, 2.0),
     "COM_DISARM_PRFLT": (FLOAT, 10.0),
     "COM_SPOOLUP_TIME": (FLOAT, 1.0),
+    "COM_OBS_AVOID": (INT, 0),
     "COM_DL_LOSS_T": (INT, 10),
     "COM_RC_LOSS_T": (FLOAT, 0.5),
     "COM_OF_LOSS_T": (FLOAT, 1.0),

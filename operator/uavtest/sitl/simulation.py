@@ -5,7 +5,8 @@ One object on the vehicle (``Vehicle.sim``) so that the vehicle keeps few instan
 ``battery`` (battery_simulator), ``gps`` (the GPS and its failure injection), ``failure_injector``
 (blocked motors and their tumble), ``failure_detector`` (commander/failure_detector),
 ``range_sensor`` (the simulated obstacle-distance sensor, None without one) and ``faulty``: a
-failure was injected, so the per-tick failure paths run from then on.
+failure was injected, so the per-tick failure paths run from then on; ``planner``: PX4-Avoidance's
+local planner with its depth camera when the test flies with it (else None).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import random
 
 from uavtest.sitl.battery_simulator import BatterySimulator
 from uavtest.sitl.commander.failure_detector import FailureDetector, FailureInjector
+from uavtest.sitl.local_planner import LocalPlanner
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.sensor_gps_sim import GpsSimulator
 from uavtest.sitl.sensor_obstacle_distance_sim import ObstacleDistanceSim
@@ -23,7 +25,15 @@ __all__ = ["Simulation"]
 
 
 class Simulation:
-    __slots__ = ("battery", "failure_detector", "failure_injector", "faulty", "gps", "range_sensor")
+    __slots__ = (
+        "battery",
+        "failure_detector",
+        "failure_injector",
+        "faulty",
+        "gps",
+        "planner",
+        "range_sensor",
+    )
 
     def __init__(self, params: ParamStore, seed: int, range_sensor: RangeSensor | None = None) -> None:
         self.gps = GpsSimulator(random.Random(f"{seed}:gps"))
@@ -32,3 +42,4 @@ class Simulation:
         self.failure_detector = FailureDetector()
         self.faulty = False
         self.range_sensor = ObstacleDistanceSim(range_sensor) if range_sensor is not None else None
+        self.planner: LocalPlanner | None = None

@@ -41,6 +41,7 @@ from uavtest.sitl.commander.vehicle_command import handle_command, unsupported
 from uavtest.sitl.ekf2 import Estimator
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.land_detector import LandDetector
+from uavtest.sitl.local_planner import LocalPlanner, PlannerParams
 from uavtest.sitl.mav import LandedState, MavSeverity, Msg, ParamType
 from uavtest.sitl.mavlink_io import custom_mode_name
 from uavtest.sitl.mavlink_streams import ORBIT_STATUS_HZ, STREAMS, SW_VERSION, orbit_execution_status
@@ -51,6 +52,7 @@ from uavtest.sitl.offboard import Offboard
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
+from uavtest.sitl.sensor_depth_sim import DepthCamera
 from uavtest.sitl.simulation import Simulation
 from uavtest.sitl.simulator_sih import Body, WindModel, World
 from uavtest.sitl.telemetry import MODES, ONBOARD, Schedule
@@ -133,7 +135,9 @@ class Vehicle:
         self.config = config
         seed = config.seed
         variation = random.Random(f"{seed}:vehicle")
-        self.params = ParamStore(config.params)
+        # PX4-Avoidance's local planner: the test's avoidance, or COM_OBS_AVOID 1 among its params
+        planner = config.avoidance is Avoidance.LOCAL_PLANNER or config.params.get("COM_OBS_AVOID") == 1
+        self.params = ParamStore({**config.params, "COM_OBS_AVOID": 1} if planner else config.params)
         self.proj = Projection(config.home.lat, config.home.lon)
         self.home_alt = config.home.alt
         self.body = Body(
@@ -150,6 +154,11 @@ class Vehicle:
         self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
         self.land = LandDetector(self.params, self.ctrl, land_jitter)
         self.nav = Navigator(self.params, self.proj, self.home_alt, random.Random(f"{seed}:navigator"))
+        if planner:  # PX4-Avoidance's local planner flies the auto modes' waypoints (COM_OBS_AVOID 1)
+            camera = DepthCamera(self.world, random.Random(f"{seed}:depth"))
+            cruise = PlannerParams(cruise=self.params["MPC_XY_CRUISE"])
+            self.sim.planner = LocalPlanner(camera, random.Random(f"{seed}:local_planner"), cruise)
+            self.nav.yaw_acceptance = False
         self.param_proto = ParamProtocol(self.params)
         self.mission_proto = MissionProtocol()
         self.link_names = [name for name, _ in config.links]
@@ -623,7 +632,12 @@ class Vehicle:
             if landed and c.sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2 and kind != GoalKind.ATTITUDE:
                 return Goal(GoalKind.IDLE)
             return Goal(kind, sticks=c.sticks)
-        return self.nav.update(self.st, t / 1e6)
+        goal = self.nav.update(self.st, t / 1e6)
+        planner = self.sim.planner
+        if planner is None or ns is _ORBIT:  # FlightTaskOrbit has no avoidance
+            return goal
+        b, e, st = self.body, self.est, self.st
+        return planner.update(t / 1e6, CONTROL_DT, st.x, st.y, st.z, st.yaw, b.vx + e.evx, b.vy + e.evy, goal)
 
     def _params_changed(self) -> None:
         for name in self.param_proto.changed:
@@ -740,7 +754,8 @@ class Vehicle:
                     t, (c.px, c.py, c.pz), (c.vx, c.vy, c.vz), (c.ax, c.ay, 0.0), c.yaw_sp, c.yawrate_sp
                 )
             )
-            self._log_setpoint(t, self.goal)
+            planner = self.sim.planner  # the triplet is the navigator's, whatever avoidance flies
+            self._log_setpoint(t, self.goal if planner is None or not planner.active else planner.goal)
         commander = self.commander
         if commander.status_dirty or tick % (CONTROL_EVERY * 50) == 0:  # on change, else 1 Hz
             commander.status_dirty = False

@@ -11,7 +11,9 @@ Mapping (upstream → uavtest):
   → ``world.home`` unless ``simulation.home_position`` is given;
 - ``robot.port`` is ignored: uavtest always talks to the vehicle over its own link;
 - ``simulation.simulator`` ros / gazebo / jmavsim → ``vehicle.simulator: builtin`` (a notice is
-  logged); ``speed``, ``headless``, ``world`` are ignored (the engine decides);
+  logged); ``ros`` (PX4 with PX4-Avoidance's local planner, the UAV Testing Competition's system
+  under test) also → ``vehicle.avoidance: local-planner``; ``speed``, ``headless``, ``world`` are
+  ignored (the engine decides);
 - ``simulation.obstacles``: objects (``size``/``position``, yaw as ``r`` or ``angle``) or flat
   lists of 7 numbers ``l, w, h, x, y, z, r`` per box; ``simulation.home_position: [lat, lon, alt]``;
   ``simulation.wind`` (Gazebo wind plugin fields, direction an ENU vector) → ``world.wind``;
@@ -48,6 +50,7 @@ __all__ = [
     "dns_name",
     "from_aerialist",
     "is_aerialist",
+    "upstream_simulator_notice",
 ]
 
 log = logging.getLogger(__name__)
@@ -92,6 +95,17 @@ _WIND_KEYS = (
     "gust_direction",
     "gust_direction_variance",
 )
+
+
+def upstream_simulator_notice(simulator: str) -> str:
+    """How uavtest flies an upstream ``simulation.simulator`` (gazebo, jmavsim, ros)."""
+    notice = "uavtest flies it with its built-in simulator (uavtest sitl)"
+    if simulator == "ros":
+        notice += (
+            " and PX4-Avoidance's local planner (vehicle.avoidance: local-planner, COM_OBS_AVOID 1),"
+            " the competition's system under test"
+        )
+    return notice
 
 
 def is_aerialist(doc: Mapping[str, Any]) -> bool:
@@ -203,8 +217,15 @@ def from_aerialist(doc: Mapping[str, Any], source: str, test_file: Path | None) 
     simulator = simulation.get("simulator")
     if simulator is not None:
         if str(simulator) in _UPSTREAM_SIMULATORS:
-            log.info("%s: simulation.simulator %s is flown with the built-in simulator", source, simulator)
+            log.info(
+                "%s: simulation.simulator %s: %s",
+                source,
+                simulator,
+                upstream_simulator_notice(str(simulator)),
+            )
             vehicle["simulator"] = "builtin"
+            if str(simulator) == "ros":  # Aerialist's ros: PX4 + PX4-Avoidance, the competition's SUT
+                vehicle["avoidance"] = "local-planner"
         elif str(simulator) in ("builtin", "px4"):
             vehicle["simulator"] = str(simulator)
         else:

@@ -49,6 +49,11 @@ def validate_command(test: Path, *, out: TextIO | None = None) -> int:
         f"{_plural(len(spec.world.obstacles), 'obstacle')}",
         file=out,
     )
+    from uavtest.engine.local import aerialist_simulator_notice
+
+    upstream = aerialist_simulator_notice(test)
+    if upstream:
+        print(f"notice: {upstream}", file=out)
     notice = unmodelled_notice(unmodelled_params(spec))
     if notice:
         print(f"warning: {notice}", file=out)

@@ -40,7 +40,8 @@ def test_competition_file_gets_a_builtin_simulator_notice(shared_data: Path) -> 
     notice = aerialist_simulator_notice(shared_data / "competition/snippets/case_studies/mission2.yaml")
     assert notice == (
         "mission2.yaml asks for the 'ros' simulator; "
-        "uavtest flies it with its built-in simulator (uavtest sitl)"
+        "uavtest flies it with its built-in simulator (uavtest sitl) and PX4-Avoidance's local planner "
+        "(vehicle.avoidance: local-planner, COM_OBS_AVOID 1), the competition's system under test"
     )
 
 

@@ -126,3 +126,14 @@ def test_px4_limits_are_warnings_in_the_result() -> None:
     spec = UavTestSpec.model_validate({**OFFBOARD, "vehicle": {"simulator": "px4"}})
     a = analyse(flown(), None, spec, index=0, seed=0, log_error="log missing")
     assert a.result.warnings and "PX4 SITL (SIH) has no obstacles" in a.result.warnings[0]
+
+
+def test_a_blocked_flight_fails_with_the_runners_reason_first(shared_data: Path) -> None:
+    """The runner ended the flight as blocked: fail, whatever the log's own assertions say."""
+    spec = UavTestSpec.model_validate({**SQUARE, "assertions": {"missionCompleted": False}})
+    rep = flown()
+    rep.ending = Ending.BLOCKED
+    rep.notes.append("blocked: no progress toward mission item 2 for 60 s (12.0 m away)")
+    a = analyse(rep, shared_data / "px4-sih/square-mission.ulg", spec, index=0, seed=0)
+    assert a.result.verdict is Verdict.FAIL
+    assert a.result.reason == "blocked: no progress toward mission item 2 for 60 s (12.0 m away)"

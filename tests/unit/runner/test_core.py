@@ -287,3 +287,27 @@ def test_once_connected_the_runner_stops_the_streams_it_never_reads() -> None:
     assert vehicle.intervals[30] == -1 and vehicle.intervals[105] == -1  # ATTITUDE, HIGHRES_IMU off
     assert 32 not in vehicle.intervals and 1 not in vehicle.intervals  # LOCAL_POSITION_NED, SYS_STATUS kept
     assert vehicle.intervals[33] == 200_000  # GLOBAL_POSITION_INT slowed to 5 Hz
+
+
+def test_a_mission_flight_without_progress_ends_blocked_after_a_minute() -> None:
+    """Airborne in mission mode, 17 m short of the waypoint and getting no closer (a wall the
+    avoidance cannot get around): the runner ends the flight as blocked, long before the timeout."""
+    mission_mode = (4 << 16) | (4 << 24)  # AUTO.MISSION
+    core = ReplicaCore(config(timeout_s=600.0))
+    vehicle = ScriptedVehicle()
+    core.start(0.0)
+    exchange(core, vehicle, [*boot(0), LockstepAnnounce(0)], wall=0.1)
+    step = 0
+    while not core.done and vehicle.grants and step < 5000:
+        t = vehicle.grants[-1].until_ms
+        z = 0.0 if step < 3 else -10.0  # took off, then hovering, turning back and forth
+        msgs = [LocalPosition(t, 0.3 * (step % 2), 0.0, z)]
+        if t % 1000 == 0:
+            msgs.append(heartbeat(armed=vehicle.armed, custom_mode=mission_mode))
+        msgs.append(LockstepAnnounce(t))
+        exchange(core, vehicle, msgs, wall=1.0 + step * 0.001)
+        step += 1
+    rep = core.report
+    assert core.done and rep.ending is Ending.BLOCKED
+    assert any(n.startswith("blocked: no progress toward mission item 1 for 60 s") for n in rep.notes)
+    assert rep.end_ms is not None and 60_000 <= rep.end_ms < 70_000

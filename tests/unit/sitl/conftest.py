@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
@@ -10,11 +11,17 @@ from uavtest.sitl.mission import NavItem, from_spec
 from uavtest.sitl.vehicle import SimConfig
 from uavtest.spec.loaders import load_test
 from uavtest.spec.mission import mission_items
+from uavtest.spec.models import Avoidance
 
 
-def competition(shared_data: Path, n: int, seed: int = 0) -> tuple[SimConfig, list[NavItem]]:
+def competition(
+    shared_data: Path, n: int, seed: int = 0, avoidance: Avoidance = Avoidance.NONE
+) -> tuple[SimConfig, list[NavItem]]:
+    """The competition's mission ``n``; its ``simulator: ros`` would fly it with the local planner,
+    the PX4 SIH comparisons want PX4 alone (``avoidance`` none) unless asked otherwise."""
     test = load_test(shared_data / "competition" / "snippets" / "case_studies" / f"mission{n}.yaml")
-    return SimConfig.from_spec(test.spec, seed), from_spec(mission_items(test.spec))
+    config = dataclasses.replace(SimConfig.from_spec(test.spec, seed), avoidance=avoidance)
+    return config, from_spec(mission_items(test.spec))
 
 
 @pytest.fixture

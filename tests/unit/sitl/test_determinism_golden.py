@@ -189,27 +189,28 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (ulog sha256, messages sha256) per scenario; re-recorded for issue 10's PX4-like flight (smooth
 #: EKF2-like estimator error, FlightTaskAuto heading lock inside NAV_ACC_RAD, move-to-land altitude)
 #: and for Collision Prevention (new ULog formats obstacle_distance(_fused), collision_constraints,
-#: distance_sensor and the CP_* / MPC_POS_MODE parameters in the header).
+#: distance_sensor and the CP_* / MPC_POS_MODE parameters in the header) and COM_OBS_AVOID (a
+#: modelled parameter now: one more in the header and the parameter list).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "f4921f062778eed6b677472ae7eb1972f04a0c924006a38d09801802dd63e15c",
+        "b9b3ba3d54b49101b97ad043e2aa7eed035de7c157614a96b861b49e6587f8a8",
         "0b9abc5eaab4d6202c69e3129c77baa0248b15fd34acd028d810323fb1a8530b",
     ),
     "manual_and_rtl": (
-        "c5f9c23e3afc4d04fb22ce4391b5680773e61fba050c1b8ccf36742f82ea2731",
+        "34a9eb1401147ffce8c6792f7f783eab639c451b03776babbf470c7cf243b4be",
         "c27fe59442b7d67f3c89e17dcfa56dad42fcbb3ff1dcd1d7813c974305364c6d",
     ),
     "datalink_loss": (
-        "6825836db4093b70eb1f70051696172076d3424e07cd00482e1b1bc08f8acb48",
+        "fc4b1da838da3fe4ad6bc360be3b8f5a7dff897fab1f22c8cc46efb466a9398b",
         "9fca5a2c8029a328adf83633b0d1b2d73e61d6c4f7af9fd3e6eacb1db8406ee6",
     ),
     "crash": (
-        "673da353da57ea99cd8cb49b0a169635e60e96b5c4a0133d5184a1d5974c2354",
+        "bcb0cadcda09ea3d997b874d44073b18772f7a633d2d43515ce8eaaa0937d5b8",
         "9a91c05b7a0afb75c8e51608e88e88c7d4f22e43289ca5680a5351443ec0603e",
     ),
     "params_and_commands": (
-        "88f695e5289b3532fbcca14d0062201c33edd788acd2168ba633da16d19abbe6",
-        "dcc15479fbe617991d46bf180aca49faa239d2382b0b3c1fa9cd36ccb5652fd7",
+        "f629bf6e872ad14005cce1ec8c735b789674a457862a7134738a8913f9d7e3b0",
+        "a7df62cd9d761afc7ee6acca4bcf05de5a74ebb9ab335cdebea2ff7031818f40",
     ),
 }
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from uavtest.spec.commands import resolved_commands
-from uavtest.spec.loaders import load_test
+from uavtest.spec.loaders import load_test, load_test_text
 from uavtest.spec.mission import mission_items
 from uavtest.spec.models import CommandAction, FlightMode, MissionItemKind, Simulator
 
@@ -116,6 +116,10 @@ def test_validate_prints_a_summary(shared_data: Path, cli) -> None:
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip().splitlines() == [
         f"ok: {path}: UavTest mission1-k8s, 3 replicas, 2 mission items, 1 command, 1 obstacle",
+        # simulator: ros is PX4 with PX4-Avoidance, the competition's system under test
+        "notice: mission1-k8s.yaml asks for the 'ros' simulator; uavtest flies it with its built-in "
+        "simulator (uavtest sitl) and PX4-Avoidance's local planner (vehicle.avoidance: local-planner, "
+        "COM_OBS_AVOID 1), the competition's system under test",
         # its params CSV sets SDLOG_PROFILE, which the built-in vehicle does not model
         "warning: 1 PX4 parameter set by the test has no effect in the built-in simulator: SDLOG_PROFILE",
     ]
@@ -126,3 +130,15 @@ def test_plan_530_is_ignored_with_a_warning(shared_data: Path, caplog: pytest.Lo
         load_test(shared_data / "competition" / "snippets" / "case_studies" / "mission2.yaml")
     warnings = [r.getMessage() for r in caplog.records if r.levelname == "WARNING"]
     assert any("mission.items[0]: command 530" in w and "mission2.plan" in w for w in warnings)
+
+
+@pytest.mark.parametrize(
+    ("simulator", "avoidance"), [("ros", "local-planner"), ("gazebo", "none"), ("jmavsim", "none")]
+)
+def test_simulator_ros_flies_with_px4_avoidance(simulator: str, avoidance: str) -> None:
+    """Aerialist's ros simulator is PX4 + PX4-Avoidance (the competition's system under test)."""
+    waypoints = "[{x: 0, y: 0, z: 10}, {x: 20, y: 0, z: 10}]"
+    text = f"simulation:\n  simulator: {simulator}\nmission:\n  waypoints: {waypoints}\n"
+    spec = load_test_text(text, "upstream.yaml").spec
+    assert spec.vehicle.simulator.value == "builtin"
+    assert spec.vehicle.avoidance.value == avoidance

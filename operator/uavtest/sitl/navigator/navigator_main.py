@@ -130,6 +130,9 @@ class Navigator:
         self.geofence = Geofence(projection)
         self.rally: list[tuple[float, float]] = []  # rally points, local x, y
         self.mission_feasible = True  # the mission passes the geofence
+        # PX4's ObstacleAvoidance publishes yaw_acceptance NaN: with avoidance on, a waypoint is
+        # accepted from any heading (Navigator::get_yaw_to_be_accepted), no MIS_YAW_ERR wait
+        self.yaw_acceptance = True
         # PX4 runs Orbit as a flight task; here the navigator hands its goal to the controller
         self.orbit = FlightTaskOrbit(params["MC_ORBIT_RAD_MAX"])
 
@@ -428,7 +431,11 @@ class Navigator:
         if s.phase == Phase.YAW:
             err = abs(wrap_pi(s.yaw - st.yaw))
             timeout = p["MIS_YAW_TMT"]
-            if err <= math.radians(p["MIS_YAW_ERR"]) or (timeout > 0 and now - s.since >= timeout):
+            if (
+                not self.yaw_acceptance
+                or err <= math.radians(p["MIS_YAW_ERR"])
+                or (timeout > 0 and now - s.since >= timeout)
+            ):
                 s.phase = Phase.HOLD
                 s.since = now
             else:
