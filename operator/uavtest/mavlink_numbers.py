@@ -112,13 +112,16 @@ class LandedState(IntEnum):
 
 
 class MavFrame(IntEnum):
-    """MAV_FRAME (the ones the runner sends)."""
+    """MAV_FRAME (the ones the runner sends and the simulator reads)."""
 
     GLOBAL = 0  # COMMAND_INT: altitude AMSL
     LOCAL_NED = 1
     GLOBAL_RELATIVE_ALT = 3
     GLOBAL_INT = 5
     GLOBAL_RELATIVE_ALT_INT = 6
+    BODY_NED = 8
+    GLOBAL_TERRAIN_ALT_INT = 11
+    BODY_FRD = 12
 
 
 class PositionTargetMask(IntEnum):

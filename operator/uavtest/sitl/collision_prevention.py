@@ -29,6 +29,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from uavtest.mavlink_numbers import MavFrame
 from uavtest.sitl.uorb import CollisionConstraints, DistanceSensor, ObstacleDistance, ObstacleDistanceFused
 
 __all__ = [
@@ -54,7 +55,11 @@ RANGE_STREAM_TIMEOUT_US = 500_000
 TIMEOUT_HOLD_US = 5_000_000
 #: a longer pause between two position-mode ticks means the flight task was switched away and back
 GAP_US = 30_000
-MAV_FRAME_GLOBAL, MAV_FRAME_LOCAL_NED, MAV_FRAME_BODY_FRD = 0, 1, 12
+MAV_FRAME_GLOBAL, MAV_FRAME_LOCAL_NED, MAV_FRAME_BODY_FRD = (
+    int(MavFrame.GLOBAL),
+    int(MavFrame.LOCAL_NED),
+    int(MavFrame.BODY_FRD),
+)
 ROTATION_UPWARD_FACING, ROTATION_DOWNWARD_FACING, ROTATION_CUSTOM = 24, 25, 100
 #: distance_sensor.orientation ROTATION_YAW_* → yaw offset (rad), _sensorOrientationToYawOffset
 _YAW_OF_ORIENTATION = {i: math.radians(45 * i) if i <= 4 else math.radians(45 * i - 360) for i in range(8)}

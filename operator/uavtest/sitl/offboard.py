@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
+from uavtest.mavlink_numbers import MavFrame
 from uavtest.px4.modes import NavState
 from uavtest.sitl import mav
 from uavtest.sitl.mav import MavSeverity, Msg
@@ -32,12 +33,11 @@ if TYPE_CHECKING:
 
 __all__ = ["Offboard"]
 
-# MAV_FRAME
-FRAME_GLOBAL_INT = 5
-FRAME_GLOBAL_RELATIVE_ALT_INT = 6
-FRAME_LOCAL_NED = 1
-FRAME_BODY_NED = 8
-FRAME_GLOBAL_TERRAIN_ALT_INT = 11
+FRAME_GLOBAL_INT = int(MavFrame.GLOBAL_INT)
+FRAME_GLOBAL_RELATIVE_ALT_INT = int(MavFrame.GLOBAL_RELATIVE_ALT_INT)
+FRAME_LOCAL_NED = int(MavFrame.LOCAL_NED)
+FRAME_BODY_NED = int(MavFrame.BODY_NED)
+FRAME_GLOBAL_TERRAIN_ALT_INT = int(MavFrame.GLOBAL_TERRAIN_ALT_INT)
 # POSITION_TARGET_TYPEMASK
 X_IGNORE, Y_IGNORE, Z_IGNORE = 1, 2, 4
 VX_IGNORE, VY_IGNORE, VZ_IGNORE = 8, 16, 32
