@@ -11,6 +11,8 @@ add a ``namespace`` target label of the operator's pod, which would rename ours
   ended with that verdict), ``uavtest_test_last_run_flakiness{test_namespace,test}``,
   ``uavtest_test_flaky_rate{test_namespace,test}`` (flaky runs / finished runs among the kept ones),
   ``uavtest_test_kept_runs{test_namespace,test,result}`` (kept runs: succeeded / failed / active),
+  ``uavtest_test_failed_runs_in_a_row{test_namespace,test}`` (runs in a row that failed, up to the
+  newest finished one: a pass resets it; history limits do not cut it short),
   ``uavtest_tests{test_namespace,phase}`` (tests by the phase of their newest run);
 - counted when a run is aggregated (counters: once per run, as the final status is written once;
   a restarted operator never aggregates a finished run again, so nothing is counted twice; Prometheus'
@@ -70,6 +72,11 @@ class TestsCollector(Collector):
             "The test's runs kept in the cluster, by result",
             labels=[NS, "test", "result"],
         )
+        in_a_row = GaugeMetricFamily(
+            "uavtest_test_failed_runs_in_a_row",
+            "Runs of the test in a row that failed, up to its newest finished run (a pass resets it)",
+            labels=[NS, "test"],
+        )
         phases = GaugeMetricFamily(
             "uavtest_tests", "UavTests by the phase of their newest run", labels=[NS, "phase"]
         )
@@ -90,6 +97,7 @@ class TestsCollector(Collector):
                 rate.add_metric(key, float(status["flakyRate"]))
             for result in ("succeeded", "failed", "active"):
                 kept.add_metric([*key, result], float(status.get(result) or 0))
+            in_a_row.add_metric(key, float(status.get("failedInARow") or 0))
             pkey = (test.namespace, str(status.get("phase") or "Pending"))
             by_phase[pkey] = by_phase.get(pkey, 0) + 1
         for (namespace, phase), n in sorted(by_phase.items()):
@@ -98,6 +106,7 @@ class TestsCollector(Collector):
         yield flakiness
         yield rate
         yield kept
+        yield in_a_row
         yield phases
 
 

@@ -35,6 +35,7 @@ from pydantic import ValidationError
 
 from uavtest.controller import names
 from uavtest.controller.status import is_final, kstatus_conditions, run_counts, run_status
+from uavtest.controller.streak import Finished, failure_streak
 from uavtest.controller.views import RunView, TestView
 from uavtest.spec.status import (
     ConditionReason,
@@ -251,6 +252,20 @@ def test_status_from(test: TestView, runs: Sequence[RunView], *, now: datetime |
         reason = ConditionReason.RUN_FAILED if last.phase == Phase.FAILED else ConditionReason.RUN_ERROR
         message = f"run {last.name} {'failed' if last.phase == Phase.FAILED else 'ended in bench errors'}"
     conds = kstatus_conditions(list(previous.conditions), passed, reason, message, generation=gen, now=now)
+    counted = (
+        (previous.streak_time, previous.streak_run)
+        if previous.streak_time is not None and previous.streak_run is not None
+        else None
+    )
+    streak, counted = failure_streak(
+        (
+            Finished(r.name, st.completion_time, st.phase)
+            for r in finished
+            if (st := statuses[r.name]).completion_time is not None
+        ),
+        previous.failed_in_a_row,
+        counted,
+    )
     return previous.model_copy(
         update={
             "phase": last.phase if last is not None else Phase.PENDING,
@@ -261,6 +276,9 @@ def test_status_from(test: TestView, runs: Sequence[RunView], *, now: datetime |
             "failed": len(finished) - succeeded,
             "flaky_runs": flaky,
             "flaky_rate": flaky / len(finished) if finished else None,
+            "failed_in_a_row": streak,
+            "streak_time": counted[0] if counted else None,
+            "streak_run": counted[1] if counted else None,
             "message": message,
             "conditions": conds,
         }

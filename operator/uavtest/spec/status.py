@@ -227,6 +227,16 @@ class TestStatus(Model):
     flaky_rate: float | None = Field(
         None, ge=0, le=1, description="flaky runs / finished runs among the kept runs"
     )
+    failed_in_a_row: int = Field(
+        0,
+        ge=0,
+        description=(
+            "runs in a row that failed, up to the newest finished one "
+            "(a pass resets it; runs that ended in bench errors do not count)"
+        ),
+    )
+    streak_run: str | None = Field(None, description="the newest finished run counted in failedInARow")
+    streak_time: datetime | None = Field(None, description="that run's completion time")
     message: str | None = Field(None, max_length=4096)
     conditions: list[Condition] = Field(default_factory=list, max_length=16)
 

@@ -51,6 +51,7 @@ def tests_now() -> list[TestView]:
                 "failed": 2,
                 "flakyRuns": 1,
                 "flakyRate": 0.25,
+                "failedInARow": 2,
             },
         ),
         view(
@@ -95,6 +96,8 @@ def test_test_series_are_computed_from_the_resources_at_scrape_time(
     assert got[("uavtest_test_flaky_rate", flaky)] == 0.25
     assert got[("uavtest_test_kept_runs", (("result", "failed"), *flaky))] == 2
     assert got[("uavtest_tests", (("phase", "Pending"), ns))] == 1
+    assert got[("uavtest_test_failed_runs_in_a_row", flaky)] == 2
+    assert got[("uavtest_test_failed_runs_in_a_row", (("test", "steady"), ns))] == 0
     # gauges, not counters: computed from the current status (a run's replicas, not a running total)
     assert "uavtest_test_last_run_replicas_total" not in {name for name, _ in got}
     # a deleted test leaves no stale series

@@ -172,3 +172,27 @@ def test_the_spec_hash_reads_120_and_120_0_as_the_same_spec() -> None:
         {"timeout": 120, "world": {"wind": [1, 2.5]}}
     )
     assert spec_hash({"timeout": 120}) != spec_hash({"timeout": 121})
+
+
+def test_failed_runs_in_a_row_survive_history_trimming_and_a_pass_resets_them() -> None:
+    """The count behind the "failing N runs in a row" alert: kept runs alone cannot give it
+    (failedRunsHistoryLimit 1 keeps one failed run), so the status carries it forward."""
+
+    def ended(phase: str, minute: int) -> dict[str, Any]:
+        return {**done(phase), "completionTime": f"2026-03-01T11:{minute:02d}:00Z"}
+
+    body = test_body(failedRunsHistoryLimit=1)
+    status: dict[str, Any] = {}
+    for i, phase in enumerate(["Succeeded", "Failed", "Error", "Failed", "Failed"]):
+        # history has trimmed every older failed run: only the newest one and this one are kept
+        kept = [run(f"hover-s{i}", f"2026-03-01T10:{i:02d}:00Z", ended(phase, i))]
+        body = test_body(failedRunsHistoryLimit=1, status=status)
+        st = test_status_from(test_view(body), kept, now=NOW)
+        status = st.model_dump(by_alias=True, exclude_none=True, mode="json")
+        # the same runs seen again (every reconcile recomputes the status) count nothing twice
+        again = test_status_from(test_view(test_body(status=status)), kept, now=NOW)
+        assert again.failed_in_a_row == st.failed_in_a_row
+    assert st.failed_in_a_row == 3  # Failed, (Error: not judged), Failed, Failed
+    passed = [run("hover-s9", "2026-03-01T10:09:00Z", ended("Succeeded", 9))]
+    st = test_status_from(test_view(test_body(status=status)), passed, now=NOW)
+    assert st.failed_in_a_row == 0
