@@ -8,7 +8,7 @@ set -euo pipefail
 
 mkdir -p "$BIN" "$SHARE" "$CACHE/src" "$CACHE/deb"
 exec 9>"$CACHE/.build.lock"; flock 9   # concurrent test sessions share the cache: one build at a time
-STEPS=("$@"); [ ${#STEPS[@]} -gt 0 ] || STEPS=(k8s kube-proxy etcd kwok minio helm coredns pause debs iptables)
+STEPS=("$@"); [ ${#STEPS[@]} -gt 0 ] || STEPS=(k8s kube-proxy etcd kwok minio helm coredns pause debs iptables prometheus)
 
 # stamp_ok NAME KEY FILE... : true when every FILE exists and the stamp of NAME reads KEY
 stamp_ok() {
@@ -136,6 +136,18 @@ build_iptables() {
   done
   ln -s ../usr/sbin/conntrack "$IPTX/bin/conntrack"
   stamp_set iptables "$key"
+}
+
+# Prometheus and promtool from Debian's package (the dashboard and alert rules are evaluated against it)
+build_prometheus() {
+  local key=prometheus
+  if stamp_ok prometheus "$key" "$BIN/prometheus" "$BIN/promtool"; then SKIPPED=1; return 0; fi
+  fetch_debs "$CACHE/deb/prom-pkgs" prometheus
+  rm -rf "$CACHE/deb/prom"; mkdir -p "$CACHE/deb/prom"
+  dpkg-deb -x "$CACHE"/deb/prom-pkgs/prometheus_*.deb "$CACHE/deb/prom"
+  ln -sf "$CACHE/deb/prom/usr/bin/prometheus" "$BIN/prometheus"
+  ln -sf "$CACHE/deb/prom/usr/bin/promtool" "$BIN/promtool"
+  stamp_set prometheus "$key"
 }
 
 # fetch_debs DIR PKG... : apt-get download PKGs into DIR (apt-get update once if the lists lack them)

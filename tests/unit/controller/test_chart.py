@@ -133,3 +133,29 @@ def test_chart_minio_toggle() -> None:
     deploy = next(d for d in docs if d["kind"] == "Deployment" and d["metadata"]["name"] == "rel-operator")
     env = {e["name"]: e for e in deploy["spec"]["template"]["spec"]["containers"][0]["env"]}
     assert env["UAVTEST_S3_ENDPOINT"]["value"] == "rel-minio.uavtest-system.svc:9000"
+
+
+def test_service_monitor_and_prometheus_rule_are_optional_and_select_the_metrics_service() -> None:
+    kinds = {d["kind"] for d in render()}
+    assert not kinds & {"ServiceMonitor", "PrometheusRule"}  # off by default: no CRDs required
+    docs = render(
+        "metrics.serviceMonitor.enabled=true",
+        "metrics.serviceMonitor.labels.release=kube-prometheus-stack",
+        "metrics.prometheusRule.enabled=true",
+        "metrics.prometheusRule.failedRunsInARow=5",
+    )
+    monitor = next(d for d in docs if d["kind"] == "ServiceMonitor")
+    service = next(
+        d for d in docs if d["kind"] == "Service" and d["metadata"]["name"] == "rel-operator-metrics"
+    )
+    assert monitor["metadata"]["labels"]["release"] == "kube-prometheus-stack"
+    selector = monitor["spec"]["selector"]["matchLabels"]
+    assert selector.items() <= service["metadata"]["labels"].items()  # it selects the metrics Service
+    assert monitor["spec"]["namespaceSelector"]["matchNames"] == ["uavtest-system"]
+    assert [e["port"] for e in monitor["spec"]["endpoints"]] == [p["name"] for p in service["spec"]["ports"]]
+    rule = next(d for d in docs if d["kind"] == "PrometheusRule")
+    exprs = {r["alert"]: r["expr"] for g in rule["spec"]["groups"] for r in g["rules"]}
+    assert exprs["UavTestFailingRepeatedly"] == "uavtest_test_failed_runs_in_a_row >= 5"
+    # every metric an alert reads is one the operator exports
+    for expr in exprs.values():
+        assert set(re.findall(r"uavtest_[a-z_]+", expr)) <= all_metric_names(), expr
