@@ -12,6 +12,7 @@ import json
 import shutil
 import subprocess
 import time
+import urllib.error
 import urllib.parse
 import urllib.request
 from pathlib import Path
@@ -73,7 +74,11 @@ class PrometheusServer:
         self.port = free_ports(1)[0]
         self.url = f"http://127.0.0.1:{self.port}"
         config = {
-            "global": {"scrape_interval": interval, "evaluation_interval": interval},
+            "global": {
+                "scrape_interval": interval,
+                "scrape_timeout": interval,
+                "evaluation_interval": interval,
+            },
             "scrape_configs": scrape_configs,
         }
         if rules is not None:
@@ -82,10 +87,15 @@ class PrometheusServer:
         self.config.write_text(yaml.safe_dump(config, sort_keys=False))
         self.log = workdir / "prometheus.log"
         self._proc: subprocess.Popen[bytes] | None = None
+        self.started = 0.0  # time.time() when it answered ready
 
     def __enter__(self) -> PrometheusServer:
         prom, tool = prometheus_binaries()
-        subprocess.run([str(tool), "check", "config", str(self.config)], check=True, capture_output=True)
+        check = subprocess.run(
+            [str(tool), "check", "config", str(self.config)], capture_output=True, text=True
+        )
+        if check.returncode != 0:
+            raise RuntimeError(f"promtool check config: {check.stdout}{check.stderr}")
         self._proc = subprocess.Popen(
             [
                 str(prom),
@@ -105,6 +115,7 @@ class PrometheusServer:
             try:
                 with urllib.request.urlopen(f"{self.url}/-/ready", timeout=2) as resp:
                     if resp.status == 200:
+                        self.started = time.time()
                         return self
             except OSError:
                 time.sleep(0.3)
@@ -121,8 +132,11 @@ class PrometheusServer:
 
     def api(self, path: str, **params: str) -> Any:
         query = urllib.parse.urlencode(params)
-        with urllib.request.urlopen(f"{self.url}/api/v1/{path}?{query}", timeout=30) as resp:
-            body = json.load(resp)
+        try:
+            with urllib.request.urlopen(f"{self.url}/api/v1/{path}?{query}", timeout=30) as resp:
+                body = json.load(resp)
+        except urllib.error.HTTPError as e:  # Prometheus explains a bad query in the body
+            raise RuntimeError(f"{path} {params}: HTTP {e.code}: {e.read().decode(errors='replace')}") from e
         if body.get("status") != "success":
             raise RuntimeError(f"{path} {params}: {body}")
         return body["data"]
