@@ -317,3 +317,49 @@ def test_uavtest_run_engine_kubernetes_waits_and_exits_like_the_local_engine(
     assert "3 passed" in passing.stderr
     failing = run("collision.yaml")
     assert failing.returncode == 1, failing.stderr[-3000:]
+
+
+def test_a_run_created_by_hand_flies_the_tests_spec_and_belongs_to_the_test(
+    cluster: Cluster, namespace: str, operator: Operator
+) -> None:
+    """`kubectl create` of a UavTestRun naming its test: an explicit re-run a person or a CI job
+    makes without touching the test. It flies the test's current spec, is owned and counted by
+    the test like the runs the operator starts, and goes when the test is deleted."""
+    name = "by-hand"
+    doc = yaml.safe_load((EXAMPLES / "hover.yaml").read_text())
+    doc["metadata"] = {"name": name, "namespace": namespace}
+    doc["spec"]["replicas"] = 1
+    cluster.kubectl("apply", "-n", namespace, "-f", "-", input=json.dumps(doc))
+    wait_complete(cluster, namespace, name)
+    run = {
+        "apiVersion": "uavtest.io/v1alpha1",
+        "kind": "UavTestRun",
+        "metadata": {"name": f"{name}-manual-1", "namespace": namespace},
+        "spec": {"testName": name, "trigger": "manual"},
+    }
+    cluster.kubectl("create", "-f", "-", input=json.dumps(run))
+    status = wait_complete(cluster, namespace, name, run=f"{name}-manual-1")
+    assert status["phase"] == "Succeeded" and status["passed"] == 1, status
+    made = cluster.kubectl_json("get", "uavtestrun", f"{name}-manual-1", "-n", namespace)
+    test = cluster.kubectl_json("get", "uavtest", name, "-n", namespace)
+    assert made["spec"]["testSpec"]["mission"] == test["spec"]["mission"]  # the test's spec, copied in
+    (owner,) = made["metadata"]["ownerReferences"]
+    assert (owner["kind"], owner["name"], owner["uid"]) == ("UavTest", name, test["metadata"]["uid"])
+    assert made["metadata"]["labels"]["uavtest.io/test"] == name
+    # the test counts it: its newest run, two kept runs, both in the metrics
+    wait_status(cluster, namespace, name, "{.status.lastRun.name}", f"{name}-manual-1", 120, kind="uavtest")
+    wait_status(cluster, namespace, name, "{.status.runs}", "2", 120, kind="uavtest")
+    labels = {"test_namespace": namespace, "test": name}
+    assert operator.metric("uavtest_test_runs_total", result="succeeded", **labels) == 2
+    # deleting the test takes the hand-made run and its Job with it
+    cluster.kubectl("delete", "uavtest", name, "-n", namespace, "--timeout=120s", timeout=150)
+    assert cluster.wait_until(
+        lambda: (
+            cluster.kubectl(
+                "get", "uavtestruns,jobs", "-n", namespace, "-l", f"uavtest.io/test={name}", "-o", "name"
+            )
+            == ""
+        ),
+        120,
+        interval=1.0,
+    )

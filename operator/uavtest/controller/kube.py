@@ -173,10 +173,10 @@ class Kube:
             raise
         return True
 
-    def patch_run_spec(self, namespace: str, name: str, spec: Mapping[str, Any]) -> dict[str, Any]:
-        """Merge-patch the UavTestRun's spec (only to fill in a hand-made run's testSpec)."""
+    def patch_run(self, namespace: str, name: str, patch: Mapping[str, Any]) -> dict[str, Any]:
+        """Merge-patch a hand-made UavTestRun: its test's owner reference and label, its testSpec."""
         return self._custom.patch_namespaced_custom_object(  # type: ignore[no-any-return]
-            names.API_GROUP, names.VERSION, namespace, names.RUN_PLURAL, name, {"spec": dict(spec)}
+            names.API_GROUP, names.VERSION, namespace, names.RUN_PLURAL, name, dict(patch)
         )
 
     def delete_run(self, namespace: str, name: str) -> bool:

@@ -127,7 +127,9 @@ def parse_test(body: Mapping[str, Any]) -> UavTest:
 
 
 def _fill_spec(rt: Runtime, body: Mapping[str, Any], view: RunView) -> Mapping[str, Any]:
-    """A run created by hand without ``spec.testSpec``: copy its test's current spec into it.
+    """A run created by hand (``kubectl create`` with ``spec.testName``): give it to its test, as
+    the runs the operator makes are (owner reference, so deleting the test deletes it; the test's
+    label), and copy the test's current spec into it when it has none.
 
     BadInput when the test does not exist; the run then ends as InvalidSpec."""
     test = rt.kube.get_test(view.namespace, view.test)
@@ -135,11 +137,30 @@ def _fill_spec(rt: Runtime, body: Mapping[str, Any], view: RunView) -> Mapping[s
         raise BadInput(
             f"no UavTest {view.test} in namespace {view.namespace}", field="spec.testName", value=view.test
         )
-    gen = int(test.get("metadata", {}).get("generation") or 1)
-    patched = rt.kube.patch_run_spec(
-        view.namespace, view.name, {"testSpec": test.get("spec") or {}, "testGeneration": gen}
-    )
-    return patched
+    meta = test.get("metadata", {})
+    patch: dict[str, Any] = {
+        "metadata": {
+            "labels": {names.LABEL_TEST: view.test},
+            "ownerReferences": [
+                {
+                    "apiVersion": names.API_VERSION,
+                    "kind": names.KIND,
+                    "name": meta.get("name", view.test),
+                    "uid": meta.get("uid", ""),
+                    "controller": True,
+                    "blockOwnerDeletion": True,
+                }
+            ],
+        }
+    }
+    if not view.has_spec:
+        gen = int(meta.get("generation") or 1)
+        patch["spec"] = {"testSpec": test.get("spec") or {}, "testGeneration": gen}
+    return rt.kube.patch_run(view.namespace, view.name, patch)
+
+
+def _owned(body: Mapping[str, Any]) -> bool:
+    return any(o.get("kind") == names.KIND for o in body.get("metadata", {}).get("ownerReferences") or [])
 
 
 def job_of(jobs: Iterable[JobView], run_id: str) -> JobView | None:
@@ -289,7 +310,7 @@ def start_run(rt: Runtime, body: Mapping[str, Any], jobs: Iterable[JobView], log
     lookup), then status."""
     view = run_view(body)
     try:
-        if not view.has_spec:
+        if not view.has_spec or not _owned(body):
             body = _fill_spec(rt, body, view)
             view = run_view(body)
         test = parse_test(body)
