@@ -58,13 +58,18 @@ CASES = SHARED / "competition" / "snippets" / "case_studies"
 Plan = Callable[[int], tuple[SimConfig, list[NavItem]]]
 
 
+#: where the PX4 SIH vehicle stood (the logs' SIH_LOC_LAT0 / SIH_LOC_LON0 / SIH_LOC_H0): PX4 sets
+#: home where it arms and ignores the plan's planned home, which lies 0.44 m south of it
+SIH_HOME = Home(lat=47.397742, lon=8.545594, alt=488.0)
+
+
 def competition(n: int) -> Plan:
     test = load_test(CASES / f"mission{n}.yaml")
     items = from_spec(mission_items(test.spec))
     # the competition files ask for the `ros` simulator (local planner); the PX4 SIH flights had
     # no avoidance, so neither do these
     return lambda seed: (
-        dataclasses.replace(SimConfig.from_spec(test.spec, seed), avoidance=Avoidance.NONE),
+        dataclasses.replace(SimConfig.from_spec(test.spec, seed), avoidance=Avoidance.NONE, home=SIH_HOME),
         items,
     )
 

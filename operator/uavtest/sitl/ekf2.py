@@ -11,6 +11,19 @@ deviation ``SIGMA_V``, correlation time ``TAU_V``) and a position error that int
 leak (``TAU``: the GPS corrections pulling the estimate back), which keeps the position error
 bounded (standard deviation about ``SIGMA_XY`` / ``SIGMA_Z``) and differentiable; the heading
 error is a slow Gauss-Markov process. No white noise reaches the logged position or velocity.
+
+On top of that, the horizontal velocity estimate carries a bias that the position does *not*
+integrate: in every PX4 v1.15 SIH log the logged velocity disagrees with the logged position's
+own 1 s displacement by a median 0.19-0.28 m/s (per axis standard deviation 0.12-0.24 m/s,
+correlation time 1.4-5 s; EKF2's accelerometer-bias learning and its GPS position corrections).
+The velocity loop drives the *estimated* velocity to its setpoint, so PX4 holds a position
+setpoint about ``bias / MPC_XY_P`` off, creeps onto waypoints and drifts off its track; with
+``NAV_ACC_RAD`` 0.5 m that drift makes FlightTaskAuto go "offtrack" mid-leg. The bias grows
+while the vehicle accelerates: in every log it reaches 0.35-0.55 m/s for 5-8 s after the
+accelerations and the braking of a leg (0.1-0.25 m/s in a steady hover or cruise), so PX4
+hovers 0-10 s beside a waypoint before it is within 0.5 m. Modelled as a Gauss-Markov process
+per axis (``TAU_BIAS``) whose standard deviation is ``SIGMA_BIAS`` at rest and grows with the
+low-passed horizontal acceleration (``BIAS_ACC_GAIN``), added to ``evx``, ``evy`` only.
 """
 
 from __future__ import annotations
@@ -26,6 +39,10 @@ SIGMA_XY = 0.12  # m: standard deviation of the horizontal position error
 SIGMA_Z = 0.08  # m
 TAU_HEADING = 3.0  # s
 SIGMA_HEADING = 0.005  # rad
+TAU_BIAS = 2.5  # s: velocity bias correlation time (SIH logs: 1.4-5 s)
+SIGMA_BIAS = 0.12  # m/s: per axis at rest
+BIAS_ACC_GAIN = 0.3  # per m/s^2 of low-passed horizontal acceleration
+TAU_ACC = 1.5  # s: the acceleration's low-pass
 #: stationary standard deviation of x for x' = -x / TAU + v, v Gauss-Markov(sigma_v, TAU_V):
 #: sigma_x^2 = sigma_v^2 * TAU_V * TAU^2 / (TAU_V + TAU)
 _GAIN = math.sqrt(TAU_V * TAU * TAU / (TAU_V + TAU))
@@ -35,31 +52,58 @@ class Estimator:
     """Position, velocity and heading error processes, advanced at the controller rate.
 
     ``ex, ey, ez`` (m) and ``evx, evy, evz`` (m/s) are the errors of the logged position and
-    velocity (NED), ``eh`` (rad) of the heading.
+    velocity (NED), ``eh`` (rad) of the heading; ``bx, by`` (m/s) the part of ``evx, evy`` that
+    the position does not integrate.
     """
 
-    __slots__ = ("_rng", "_sv", "eh", "evx", "evy", "evz", "ex", "ey", "ez")
+    __slots__ = (
+        "_acc",
+        "_cvx",
+        "_cvy",
+        "_rng",
+        "_sv",
+        "bx",
+        "by",
+        "eh",
+        "evx",
+        "evy",
+        "evz",
+        "ex",
+        "ey",
+        "ez",
+    )
 
     def __init__(self, rng: random.Random) -> None:
         self._rng = rng
         g = rng.gauss
         self._sv = (SIGMA_XY / _GAIN, SIGMA_XY / _GAIN, SIGMA_Z / _GAIN)
         sx, sy, sz = self._sv
-        self.evx, self.evy, self.evz = g(0, sx), g(0, sy), g(0, sz)
+        self._cvx, self._cvy, self.evz = g(0, sx), g(0, sy), g(0, sz)
         self.ex, self.ey, self.ez = g(0, SIGMA_XY), g(0, SIGMA_XY), g(0, SIGMA_Z)
         self.eh = g(0, SIGMA_HEADING)
+        self.bx, self.by = g(0, SIGMA_BIAS), g(0, SIGMA_BIAS)
+        self.evx, self.evy = self._cvx + self.bx, self._cvy + self.by
+        self._acc = 0.0
 
-    def update(self, dt: float) -> None:
+    def update(self, dt: float, acc: float = 0.0) -> None:
+        """Advance ``dt`` seconds; ``acc`` is the vehicle's horizontal acceleration (m/s^2)."""
         av = math.exp(-dt / TAU_V)
         bv = math.sqrt(1 - av * av)
         leak = 1.0 - dt / TAU
         g = self._rng.gauss
         sx, sy, sz = self._sv
-        self.evx = av * self.evx + bv * sx * g(0.0, 1.0)
-        self.evy = av * self.evy + bv * sy * g(0.0, 1.0)
+        self._cvx = av * self._cvx + bv * sx * g(0.0, 1.0)
+        self._cvy = av * self._cvy + bv * sy * g(0.0, 1.0)
         self.evz = av * self.evz + bv * sz * g(0.0, 1.0)
-        self.ex = leak * self.ex + self.evx * dt
-        self.ey = leak * self.ey + self.evy * dt
+        self.ex = leak * self.ex + self._cvx * dt
+        self.ey = leak * self.ey + self._cvy * dt
         self.ez = leak * self.ez + self.evz * dt
+        self._acc += (acc - self._acc) * (dt / TAU_ACC)
+        ab = math.exp(-dt / TAU_BIAS)
+        bb = math.sqrt(1 - ab * ab) * SIGMA_BIAS * (1.0 + BIAS_ACC_GAIN * self._acc)
+        self.bx = ab * self.bx + bb * g(0.0, 1.0)
+        self.by = ab * self.by + bb * g(0.0, 1.0)
+        self.evx = self._cvx + self.bx
+        self.evy = self._cvy + self.by
         ah = math.exp(-dt / TAU_HEADING)
         self.eh = ah * self.eh + math.sqrt(1 - ah * ah) * SIGMA_HEADING * g(0.0, 1.0)

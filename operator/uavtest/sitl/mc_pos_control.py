@@ -52,6 +52,9 @@ class GoalKind(Enum):
     OFFBOARD = "offboard"  # trajectory_setpoint of an offboard client: x, y, z and/or vel, yaw / yawspeed
 
 
+NO_TRACK = (math.nan, math.nan)
+
+
 @dataclass(slots=True)
 class Goal:
     kind: GoalKind = GoalKind.IDLE
@@ -63,6 +66,10 @@ class Goal:
     sticks: tuple[float, float, float, float] = (0.0, 0.0, 0.5, 0.0)  # x fwd, y right, z thrust 0..1, r yaw
     vel: tuple[float, float, float] = (math.nan, math.nan, math.nan)  # offboard velocity (nan: not set)
     yawspeed: float = math.nan  # offboard yaw rate (nan: not set)
+    #: POSITION: the previous waypoint (position_setpoint_triplet.previous), the start of the
+    #: track to x, y; NO_TRACK: none (fly straight to x, y)
+    prev: tuple[float, float] = NO_TRACK
+    acc_rad: float = math.nan  # POSITION: the target's acceptance radius (nan: NAV_ACC_RAD)
 
 
 @dataclass(frozen=True, slots=True)
@@ -142,6 +149,57 @@ class Limits:
         )
 
 
+def max_speed_from_distance(jerk: float, accel: float, distance: float, final: float) -> float:
+    """``math::computeMaxSpeedFromDistance`` (PX4 TrajMath.hpp): the speed from which the
+    jerk-limited trajectory can still slow to ``final`` within ``distance``."""
+    b = 4.0 * accel * accel / max(jerk, 1e-3)
+    c = -2.0 * accel * distance - final * final
+    return max(0.5 * (-b + math.sqrt(b * b - 4.0 * c)), final)
+
+
+def track_target(goal: Goal, x: float, y: float, acc_rad: float) -> tuple[float, float, bool]:
+    """Where a POSITION goal's trajectory heads now: FlightTaskAuto's internal waypoints.
+
+    ``FlightTaskAuto::_getCurrentState`` / ``_updateInternalWaypoints`` (PX4 v1.15): with a
+    previous waypoint, the vehicle follows the line from it to the target; when it is more than
+    the acceptance radius off that line ("offtrack") it heads for the closest point of the line
+    first, and when the previous waypoint is still ahead of it, for that waypoint first. Returns
+    (x, y, via): via is True while heading for such an internal waypoint.
+    """
+    px, py = goal.prev
+    if px != px:
+        return goal.x, goal.y, False
+    ux, uy = goal.x - px, goal.y - py
+    length = math.hypot(ux, uy)
+    if length < 1e-6:
+        return goal.x, goal.y, False
+    ux, uy = ux / length, uy / length
+    if ux * (goal.x - x) + uy * (goal.y - y) < 0.0:  # target behind: straight to it
+        return goal.x, goal.y, False
+    along = ux * (x - px) + uy * (y - py)
+    if along < 0.0 and math.hypot(x - px, y - py) > acc_rad:  # previous waypoint in front
+        return px, py, True
+    cx, cy = px + ux * along, py + uy * along
+    if math.hypot(x - cx, y - cy) > acc_rad:  # offtrack: back to the closest point of the track
+        return cx, cy, True
+    return goal.x, goal.y, False
+
+
+def turn_speed(
+    x: float, y: float, tx: float, ty: float, nx: float, ny: float, acc: float, acc_rad: float
+) -> float:
+    """The speed PX4 allows through an internal waypoint (tx, ty) on the way to (nx, ny):
+    ``computeStartXYSpeedFromWaypoints``' turn speed, sqrt(0.8 MPC_ACC_HOR r tan(alpha / 2))."""
+    ax, ay = tx - x, ty - y
+    bx, by = tx - nx, ty - ny
+    na, nb = math.hypot(ax, ay), math.hypot(bx, by)
+    if na < 1e-6 or nb < acc_rad:
+        return 0.0
+    cos_alpha = max(-1.0, min(1.0, (ax * bx + ay * by) / (na * nb)))
+    alpha = min(math.acos(cos_alpha), math.pi - 1e-6)
+    return math.sqrt(0.8 * acc * acc_rad * math.tan(alpha / 2.0))
+
+
 class Controller:
     """Turns a Goal and the estimated state into acceleration (NED, net of gravity) and yaw-rate commands."""
 
@@ -175,17 +233,20 @@ class Controller:
 
     # ------------------------------------------------------------------ horizontal reference
 
-    def _xy_reference(self, dt: float, tx: float, ty: float, speed: float, x: float, y: float) -> None:
+    def _xy_reference(
+        self, dt: float, tx: float, ty: float, speed: float, x: float, y: float, final: float = 0.0
+    ) -> None:
         lim = self.lim
-        v = math.hypot(self.vx, self.vy)
-        lag = ((self.px - x) * self.vx + (self.py - y) * self.vy) / v if v > 1e-3 else 0.0
-        stretch = 1.0 - lag / lim.err_max if lag > 0.0 else 1.0
-        self.stretch = stretch = stretch if stretch > 0.0 else 0.0
+        # PositionSmoothing::_generateTrajectory: while the drone is behind the trajectory, its
+        # integration time shrinks with the horizontal distance to it (MPC_XY_ERR_MAX)
+        ahead = (self.px - x) * self.vx + (self.py - y) * self.vy < 0.0
+        err = math.hypot(self.px - x, self.py - y)
+        stretch = 1.0 if ahead else 1.0 - min(err / lim.err_max, 1.0)
+        self.stretch = stretch
         dts = dt * stretch
         ex, ey = tx - self.px, ty - self.py
         dist = math.hypot(ex, ey)
-        brake = lim.acc_hor / 3.0
-        vmax = min(speed, math.sqrt(2.0 * brake * dist))
+        vmax = min(speed, max_speed_from_distance(lim.jerk, lim.acc_hor, dist, final))
         if dist > 1e-6:
             vdx, vdy = ex / dist * vmax, ey / dist * vmax
         else:
@@ -212,11 +273,14 @@ class Controller:
 
     def _xy_loops(self, dt: float, x: float, y: float, vx: float, vy: float) -> tuple[float, float]:
         lim = self.lim
-        vcx = self.vx * self.stretch + lim.xy_p * (self.px - x)
-        vcy = self.vy * self.stretch + lim.xy_p * (self.py - y)
+        # the trajectory's velocity is fed forward unstretched (PositionSmoothing's output)
+        vcx = self.vx + lim.xy_p * (self.px - x)
+        vcy = self.vy + lim.xy_p * (self.py - y)
         evx, evy = vcx - vx, vcy - vy
-        self.ix = max(-3.0, min(3.0, self.ix + lim.vxy_i * evx * dt))
-        self.iy = max(-3.0, min(3.0, self.iy + lim.vxy_i * evy * dt))
+        # the integrator holds the drag (SIH_KDV); PX4 bounds it only by tracking anti-windup
+        imax = GRAVITY * math.tan(lim.tilt_max)
+        self.ix = max(-imax, min(imax, self.ix + lim.vxy_i * evx * dt))
+        self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * evy * dt))
         return lim.vxy_p * evx + self.ix + self.ax, lim.vxy_p * evy + self.iy + self.ay
 
     def _z_loops(self, dt: float, z: float, vz: float, position: bool) -> float:
@@ -270,15 +334,20 @@ class Controller:
             return 0.0, 0.0, GRAVITY, 0.0
         if kind is GoalKind.POSITION:
             speed = goal.speed if goal.speed == goal.speed else lim.cruise
-            self._xy_reference(dt, goal.x, goal.y, min(speed, lim.vel_max), x, y)
+            speed = min(speed, lim.vel_max)
+            acc_rad = goal.acc_rad if goal.acc_rad == goal.acc_rad else lim.acc_rad
+            tx, ty, via = track_target(goal, x, y, acc_rad)
+            if via:  # an internal waypoint before the target: PX4's speed through it
+                speed = min(speed, turn_speed(x, y, tx, ty, goal.x, goal.y, lim.acc_hor, acc_rad))
+            self._xy_reference(dt, tx, ty, speed, x, y, final=0.0 if not via else speed)
             self._z_reference(dt, goal.z)
             target_yaw = goal.yaw
             if math.isnan(target_yaw) and lim.yaw_mode == 0:
-                # FlightTaskAuto: heading towards the target while outside the acceptance
-                # radius, locked inside it
-                d = math.hypot(goal.x - x, goal.y - y)
-                if d >= lim.acc_rad:
-                    target_yaw = math.atan2(goal.y - y, goal.x - x)
+                # FlightTaskAuto::_set_heading_from_mode: heading towards the (internal) target
+                # while outside the acceptance radius, locked inside it
+                d = math.hypot(tx - x, ty - y)
+                if d >= acc_rad:
+                    target_yaw = math.atan2(ty - y, tx - x)
             ax, ay = self._xy_loops(dt, x, y, vx, vy)
             az = self._z_loops(dt, z, vz, True)
         elif kind is GoalKind.TAKEOFF:
@@ -355,8 +424,9 @@ class Controller:
         self.ax = self.ay = 0.0
         self.stretch = 1.0
         evx, evy = cx - vx, cy - vy
-        self.ix = max(-3.0, min(3.0, self.ix + lim.vxy_i * evx * dt))
-        self.iy = max(-3.0, min(3.0, self.iy + lim.vxy_i * evy * dt))
+        imax = GRAVITY * math.tan(lim.tilt_max)
+        self.ix = max(-imax, min(imax, self.ix + lim.vxy_i * evx * dt))
+        self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * evy * dt))
         ax, ay = self._limit_tilt(lim.vxy_p * evx + self.ix, lim.vxy_p * evy + self.iy, lim.tilt_max)
         az = self._z_loops(dt, z, vz, False)
         if goal.yawspeed == goal.yawspeed and goal.yaw != goal.yaw:

@@ -22,8 +22,11 @@ __all__ = ["GRAVITY", "Body", "Box", "WindModel", "World"]
 GRAVITY = 9.80665
 TAU_TILT = 0.12  # s, horizontal acceleration (attitude) response
 TAU_THRUST = 0.05  # s, vertical thrust response
-DRAG_LINEAR = 0.15  # 1/s
-DRAG_QUADRATIC = 0.06  # 1/m
+DRAG_LINEAR = 1.0  # 1/s: PX4 SIH's first-order drag, SIH_KDV / SIH_MASS (1.0 N s/m / 1 kg)
+DRAG_QUADRATIC = 0.0  # 1/m: SIH has none
+#: the competition's system under test flies Gazebo's iris, far less draggy than SIH: (linear 1/s,
+#: quadratic 1/m) as calibrated against the competition's own local-planner flights
+DRAG_GAZEBO_IRIS = (0.15, 0.06)
 DRAG_VERTICAL = 0.8  # 1/s
 LIFTOFF_ACC = 3.0  # m/s^2 of net upward thrust needed to leave the ground (PX4 SIH lifts off late)
 NEAR_MARGIN = 8.0  # m: boxes within this of the vehicle are checked every physics step
@@ -178,7 +181,12 @@ class Body:
         "z",
     )
 
-    def __init__(self, tau_tilt: float = TAU_TILT, drag_scale: float = 1.0) -> None:
+    def __init__(
+        self,
+        tau_tilt: float = TAU_TILT,
+        drag_scale: float = 1.0,
+        drag: tuple[float, float] = (DRAG_LINEAR, DRAG_QUADRATIC),
+    ) -> None:
         self.x = self.y = self.z = 0.0
         self.vx = self.vy = self.vz = 0.0
         self.ax = self.ay = self.az = 0.0  # acceleration from thrust (without gravity), NED
@@ -187,8 +195,8 @@ class Body:
         self.on_ground = True
         self.motors = False
         self.tau_tilt = tau_tilt
-        self.kl = DRAG_LINEAR * drag_scale
-        self.kq = DRAG_QUADRATIC * drag_scale
+        self.kl = drag[0] * drag_scale
+        self.kq = drag[1] * drag_scale
 
     def step(
         self, dt: float, cax: float, cay: float, caz: float, cyawrate: float, wn: float, we: float, wd: float

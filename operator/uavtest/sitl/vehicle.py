@@ -54,7 +54,7 @@ from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
 from uavtest.sitl.sensor_depth_sim import DepthCamera
 from uavtest.sitl.simulation import Simulation
-from uavtest.sitl.simulator_sih import Body, WindModel, World
+from uavtest.sitl.simulator_sih import DRAG_GAZEBO_IRIS, DRAG_LINEAR, DRAG_QUADRATIC, Body, WindModel, World
 from uavtest.sitl.telemetry import MODES, ONBOARD, Schedule
 from uavtest.sitl.ulog_writer import LOG_LEVEL
 from uavtest.spec.models import Avoidance, Home, Obstacle, RangeSensor, UavTestSpec, Wind
@@ -140,8 +140,12 @@ class Vehicle:
         self.params = ParamStore({**config.params, "COM_OBS_AVOID": 1} if planner else config.params)
         self.proj = Projection(config.home.lat, config.home.lon)
         self.home_alt = config.home.alt
+        # the local planner models the competition's system under test (PX4 + PX4-Avoidance in
+        # Gazebo, iris); everything else flies PX4 SIH's physics
         self.body = Body(
-            tau_tilt=0.12 * variation.uniform(0.9, 1.1), drag_scale=variation.uniform(0.93, 1.07)
+            tau_tilt=0.12 * variation.uniform(0.9, 1.1),
+            drag_scale=variation.uniform(0.93, 1.07),
+            drag=DRAG_GAZEBO_IRIS if planner else (DRAG_LINEAR, DRAG_QUADRATIC),
         )
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
@@ -444,7 +448,7 @@ class Vehicle:
 
     def _control_tick(self, t: int) -> None:
         dt = CONTROL_DT
-        self.est.update(dt)
+        self.est.update(dt, math.hypot(self.body.ax, self.body.ay))
         self.wind.update(dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:
             self.world.refresh_near(self.body.x, self.body.y)

@@ -342,7 +342,7 @@ def test_the_ulog_has_the_scan_and_cp_topics_in_px4_format() -> None:
 
     sink = MemorySink()
     v = _position_mode_vehicle({"CP_DIST": 2.0, "MPC_POS_MODE": 0}, SENSOR, sink)
-    _count(v, 5.0)
+    _count(v, 10.0)
     log = ULog(io.BytesIO(sink.current or b""))
     od = log.get_dataset("obstacle_distance")
     assert od.data["increment"][0] == 5.0 and od.data["frame"][0] == 12

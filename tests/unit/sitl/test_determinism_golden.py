@@ -190,27 +190,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: EKF2-like estimator error, FlightTaskAuto heading lock inside NAV_ACC_RAD, move-to-land altitude)
 #: and for Collision Prevention (new ULog formats obstacle_distance(_fused), collision_constraints,
 #: distance_sensor and the CP_* / MPC_POS_MODE parameters in the header) and COM_OBS_AVOID (a
-#: modelled parameter now: one more in the header and the parameter list).
+#: modelled parameter now: one more in the header and the parameter list); and for PX4 SIH's
+#: physics (SIH_KDV drag held by the velocity integrator), EKF2's velocity bias and
+#: FlightTaskAuto's track states (offtrack) with PX4's braking distance (2026-11-24).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "b9b3ba3d54b49101b97ad043e2aa7eed035de7c157614a96b861b49e6587f8a8",
-        "0b9abc5eaab4d6202c69e3129c77baa0248b15fd34acd028d810323fb1a8530b",
+        "960c2b2d68e5f10be99b19b299f6bee5242a4c3ded714f420cbeb52c46463a03",
+        "77c161157e409191ae1748979f9f683c9d1ca22a1d941464b3c118cae3661e35",
     ),
     "manual_and_rtl": (
-        "34a9eb1401147ffce8c6792f7f783eab639c451b03776babbf470c7cf243b4be",
-        "c27fe59442b7d67f3c89e17dcfa56dad42fcbb3ff1dcd1d7813c974305364c6d",
+        "cfd0937ba7cafad8f00b01f91bacdd4f89cff1dd3418ec4d1882c807dab4c085",
+        "ab60a13b92fca00c3b649da3b138d3d318ccae16825d096b456ce282368af661",
     ),
     "datalink_loss": (
-        "fc4b1da838da3fe4ad6bc360be3b8f5a7dff897fab1f22c8cc46efb466a9398b",
-        "9fca5a2c8029a328adf83633b0d1b2d73e61d6c4f7af9fd3e6eacb1db8406ee6",
+        "da3f270c859df16c7f6e65459fb7ada4e11f2a9d37b06301cb35d0061783dc03",
+        "75702c23265cbb61b9d5624f5a7aa2531177be60e588e751b0b5bb77cf3fca39",
     ),
     "crash": (
-        "bcb0cadcda09ea3d997b874d44073b18772f7a633d2d43515ce8eaaa0937d5b8",
-        "9a91c05b7a0afb75c8e51608e88e88c7d4f22e43289ca5680a5351443ec0603e",
+        "96f6806a26b05219379d0fba11c36b26129b9da5f98738e80dd54e18396f60b9",
+        "2a676d1fd3e5c1bc862613ff3c2f14aadd65a29f0ef56d4f4b5a9f64fc5f8a8c",
     ),
     "params_and_commands": (
-        "f629bf6e872ad14005cce1ec8c735b789674a457862a7134738a8913f9d7e3b0",
-        "a7df62cd9d761afc7ee6acca4bcf05de5a74ebb9ab335cdebea2ff7031818f40",
+        "9f4c9beb26f7287773cb2746c919041381557ef120362c3e5fb8399c1f421ad1",
+        "3cdef1d6f9ac91fc0f18983c684388352892b557b2aaedabea4b1d63982be019",
     ),
 }
 

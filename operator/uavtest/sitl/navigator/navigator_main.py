@@ -8,6 +8,8 @@ queues events (mission item reached, mission finished, status texts). PX4 behavi
   and ``NAV_MC_ALT_RAD``; with ``MPC_YAW_MODE`` 0 the vehicle then turns towards the next
   waypoint and waits until the heading error is below ``MIS_YAW_ERR`` (or ``MIS_YAW_TMT``
   passes) before the item counts as reached; then it holds ``param1`` seconds;
+- a waypoint is flown along the track from the previous one (``Goal.prev``, PX4's
+  position_setpoint_triplet.previous): the controller's FlightTaskAuto states (offtrack, ...);
 - a land item first flies to its position at the current altitude (reached then, as PX4
   reports it), then descends; the mission is finished once landed;
 - DO_CHANGE_SPEED sets the cruise speed; camera items are skipped;
@@ -36,17 +38,13 @@ from uavtest.px4.modes import NavState
 from uavtest.sitl.flight_task_orbit import FlightTaskOrbit
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.mav import MavCmd, MavSeverity
-from uavtest.sitl.mc_pos_control import Goal, GoalKind, wrap_pi
+from uavtest.sitl.mc_pos_control import NO_TRACK, Goal, GoalKind, wrap_pi
 from uavtest.sitl.mission import NavItem, has_position
 from uavtest.sitl.navigator.geofence import NAV_RALLY_POINT, Geofence, rally_destination
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.uorb import GeofenceResult
 
 __all__ = ["Event", "EventKind", "Navigator", "State"]
-
-
-SETTLE_OFFSET_MAX = 3.0  # m
-SETTLE_TAU = 4.0  # s
 
 
 class EventKind(Enum):
@@ -298,6 +296,8 @@ class Navigator:
     def _goal_set(self, kind: GoalKind, x: float, y: float, z: float, yaw: float = math.nan) -> Goal:
         g = self._goal
         g.kind, g.x, g.y, g.z, g.yaw, g.speed = kind, x, y, z, yaw, self.speed
+        g.prev = NO_TRACK
+        g.acc_rad = math.nan
         return g
 
     # ------------------------------------------------------------------ mission
@@ -323,9 +323,14 @@ class Navigator:
             self.reached = self.current
             self.events.append(Event(EventKind.REACHED, self.current))
         if self.current + 1 < len(self.mission):
+            old = self._step
+            was_position = old.phase in (Phase.TAKEOFF, Phase.FLY, Phase.YAW, Phase.HOLD)
             self.current += 1
             self.events.append(Event(EventKind.CURRENT, self.current))
             self._step = _Step(since=now)
+            if was_position and not math.isnan(old.x):
+                # position_setpoint_triplet.previous: the item just reached
+                self._step.extra.update(prev_x=old.x, prev_y=old.y)
         else:
             self._finish()
 
@@ -426,8 +431,11 @@ class Navigator:
                     ):
                         s.yaw = math.atan2(nxt[1] - s.y, nxt[0] - s.x)
             else:
-                gx, gy = self._settling(s, st, now)
-                return self._goal_set(GoalKind.POSITION, gx, gy, s.z)
+                g = self._goal_set(GoalKind.POSITION, s.x, s.y, s.z)
+                if "prev_x" in s.extra:
+                    g.prev = (s.extra["prev_x"], s.extra["prev_y"])
+                g.acc_rad = radius
+                return g
         if s.phase == Phase.YAW:
             err = abs(wrap_pi(s.yaw - st.yaw))
             timeout = p["MIS_YAW_TMT"]
@@ -454,25 +462,6 @@ class Navigator:
                 return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
             return self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
         return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
-
-    def _settling(self, s: _Step, st: State, now: float) -> tuple[float, float]:
-        """The position setpoint while approaching: PX4's setpoint stops short of a waypoint by up
-        to a metre or so (its trajectory lags, SIH logs show 0-1.3 m) and then creeps onto it, which
-        makes its hover before "reached" last 0-8 s. Modelled as a seeded offset towards where the
-        vehicle came from, decaying with ``SETTLE_TAU`` once the vehicle has arrived."""
-        ex = s.extra
-        if "ox" not in ex:
-            dx, dy = s.x - st.x, s.y - st.y
-            d = math.hypot(dx, dy)
-            off = self.rng.uniform(0.0, SETTLE_OFFSET_MAX) if d > 5.0 else 0.0
-            ex["ox"], ex["oy"] = (-dx / d * off, -dy / d * off) if d > 0 else (0.0, 0.0)
-        gx, gy = s.x + ex["ox"], s.y + ex["oy"]
-        if "arrived" not in ex:
-            if math.hypot(gx - st.x, gy - st.y) > 1.0:
-                return gx, gy
-            ex["arrived"] = now
-        f = math.exp(-(now - ex["arrived"]) / SETTLE_TAU)
-        return s.x + ex["ox"] * f, s.y + ex["oy"] * f
 
     # ------------------------------------------------------------------ return to launch
 
