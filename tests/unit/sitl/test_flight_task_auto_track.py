@@ -1,0 +1,71 @@
+"""FlightTaskAuto's track states and PX4's speed limits (PX4 v1.15 FlightTaskAuto.cpp, TrajMath.hpp),
+and EKF2's velocity bias that the position does not integrate."""
+
+from __future__ import annotations
+
+import math
+import random
+
+import pytest
+
+from uavtest.sitl.ekf2 import Estimator
+from uavtest.sitl.mc_pos_control import Goal, GoalKind, max_speed_from_distance, track_target, turn_speed
+
+
+def _leg() -> Goal:
+    g = Goal(GoalKind.POSITION, x=0.0, y=50.0, z=-10.0)
+    g.prev = (0.0, 0.0)
+    return g
+
+
+def test_on_track_the_target_is_the_waypoint() -> None:
+    assert track_target(_leg(), 0.3, 20.0, 0.5) == (0.0, 50.0, False)
+
+
+def test_offtrack_heads_for_the_closest_point_of_the_line() -> None:
+    # run2 of mission1 at t = 14.3 s: 0.53 m beside the line with NAV_ACC_RAD 0.5
+    assert track_target(_leg(), 0.53, 20.0, 0.5) == (0.0, 20.0, True)
+    # with PX4's default NAV_ACC_RAD (2 m) the same drift is on track
+    assert track_target(_leg(), 0.53, 20.0, 2.0) == (0.0, 50.0, False)
+
+
+def test_previous_waypoint_in_front_and_target_behind() -> None:
+    assert track_target(_leg(), 0.0, -3.0, 0.5) == (0.0, 0.0, True)
+    assert track_target(_leg(), 1.0, 52.0, 0.5) == (0.0, 50.0, False)  # passed: straight back to it
+    no_track = Goal(GoalKind.POSITION, x=5.0, y=5.0)
+    assert track_target(no_track, 3.0, -3.0, 0.5) == (5.0, 5.0, False)
+
+
+def test_turn_speed_through_a_right_angle_and_braking_distance() -> None:
+    # computeMaxSpeedInWaypoint(90 deg, 0.8 * 3 m/s^2, 0.5 m) = sqrt(1.2)
+    assert turn_speed(0.5, 20.0, 0.0, 20.0, 0.0, 50.0, 3.0, 0.5) == pytest.approx(math.sqrt(1.2), rel=1e-3)
+    # straight on: no limit worth the name
+    assert turn_speed(0.0, 10.0, 0.0, 20.0, 0.0, 50.0, 3.0, 0.5) > 100.0
+    # computeMaxSpeedFromDistance(jerk 4, accel 3, d, 0): 0.5 (-9 + sqrt(81 + 24 d))
+    assert max_speed_from_distance(4.0, 3.0, 10.0, 0.0) == pytest.approx(0.5 * (-9 + math.sqrt(321)))
+    assert max_speed_from_distance(4.0, 3.0, 0.0, 1.1) == pytest.approx(1.1)
+
+
+def test_the_velocity_bias_does_not_move_the_position_estimate() -> None:
+    e = Estimator(random.Random(1))
+    gaps, pos = [], []
+    for _ in range(50 * 120):
+        e.update(0.02, acc=0.0)
+        gaps.append(e.evx - e._cvx)
+        pos.append(e.ex)
+    # the bias is a tenth of a m/s, the position error stays bounded like a leaky integral of the rest
+    assert 0.05 < (sum(g * g for g in gaps) / len(gaps)) ** 0.5 < 0.3
+    assert max(abs(p) for p in pos) < 1.0
+    assert e.evx == pytest.approx(e._cvx + e.bx)  # the logged velocity error: integrated part + bias
+
+
+def test_the_bias_grows_while_the_vehicle_accelerates() -> None:
+    def rms(acc: float) -> float:
+        e = Estimator(random.Random(7))
+        xs = []
+        for _ in range(50 * 300):
+            e.update(0.02, acc=acc)
+            xs.append(e.bx)
+        return (sum(x * x for x in xs) / len(xs)) ** 0.5
+
+    assert rms(3.0) > 1.5 * rms(0.0)
