@@ -34,6 +34,7 @@ from rich.table import Table
 from uavtest.analysis.fidelity import (
     FIGURES,
     FlightFigures,
+    arrival_velocity_errors,
     flight_figures,
     pairs_between,
     pairs_within,
@@ -100,22 +101,44 @@ PLANS: dict[str, tuple[Plan | None, list[str]]] = {
 }
 
 
-def px4_flights(names: list[str]) -> list[FlightFigures]:
-    return [flight_figures(trajectory_from_ulog(read_ulog(PX4_SIH / name))) for name in names]
+@dataclasses.dataclass
+class Flights:
+    figures: list[FlightFigures]
+    #: EKF2's horizontal velocity error on each arrival, every flight's together (m/s)
+    arrival_errors: list[float]
 
 
-def builtin_flights(plan: Plan, seeds: int) -> tuple[list[FlightFigures], float]:
-    out = []
+def _measure(ulog: ULog, into: Flights) -> None:
+    traj = trajectory_from_ulog(ulog)
+    into.figures.append(flight_figures(traj))
+    lp = ulog.get_dataset("vehicle_local_position").data
+    t = lp["timestamp"] / 1e6
+    air = (t >= traj.t[0]) & (t <= traj.t[-1])
+    into.arrival_errors += arrival_velocity_errors(
+        *(lp[k][air] if k != "timestamp" else t[air] for k in ("timestamp", "x", "y", "vx", "vy"))
+    )
+
+
+def px4_flights(names: list[str]) -> Flights:
+    out = Flights([], [])
+    for name in names:
+        _measure(read_ulog(PX4_SIH / name), out)
+    return out
+
+
+def builtin_flights(plan: Plan, seeds: int) -> tuple[Flights, float]:
+    out = Flights([], [])
     start = time.perf_counter()
     for seed in range(seeds):
         config, items = plan(seed)
         sink = MemorySink()
         fly_mission(config, items, sink=sink)
-        out.append(flight_figures(trajectory_from_ulog(ULog(io.BytesIO(sink.logs[0])))))
+        _measure(ULog(io.BytesIO(sink.logs[0])), out)
     return out, time.perf_counter() - start
 
 
-def table(name: str, px4: list[FlightFigures], ours: list[FlightFigures]) -> tuple[Table, bool]:
+def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
+    px4, ours = px4_all.figures, ours_all.figures
     t = Table(title=f"{name}: built-in ({len(ours)} seeds) vs PX4 v1.15 SIH ({len(px4)} runs)")
     t.add_column("figure")
     t.add_column("PX4 vs PX4", justify="right")
@@ -144,6 +167,15 @@ def table(name: str, px4: list[FlightFigures], ours: list[FlightFigures]) -> tup
     jit_px4 = spread([f.jitter for f in px4])
     jit_ours = spread([f.jitter for f in ours])
     t.add_row("velocity jitter (10 Hz diff vs 1 s mean), m/s", str(jit_px4), str(jit_ours), "", "")
+    if px4_all.arrival_errors and ours_all.arrival_errors:
+        a_px4, a_ours = px4_all.arrival_errors, ours_all.arrival_errors
+        t.add_row(
+            "EKF2 velocity error on arrival, median (range), m/s",
+            f"{statistics.median(a_px4):.2f} ({min(a_px4):.2f}–{max(a_px4):.2f})",
+            f"{statistics.median(a_ours):.2f} ({min(a_ours):.2f}–{max(a_ours):.2f})",
+            "",
+            "",
+        )
     return t, ok
 
 
@@ -167,9 +199,9 @@ def main() -> None:
         px4 = px4_flights(logs)
         ours, wall = builtin_flights(plan, args.seeds)
         t, ok = table(name, px4, ours)
-        all_ok &= ok or len(px4) < 2
+        all_ok &= ok or len(px4.figures) < 2
         console.print(t)
-        per = statistics.mean(f.flight_time for f in ours)
+        per = statistics.mean(f.flight_time for f in ours.figures)
         console.print(f"  {args.seeds} built-in flights in {wall:.1f} s wall ({per:.0f} s flight each)\n")
     console.print(
         "every built-in-vs-PX4 mean inside PX4's run-to-run range" if all_ok else "[red]not all inside[/red]"

@@ -448,7 +448,7 @@ class Vehicle:
 
     def _control_tick(self, t: int) -> None:
         dt = CONTROL_DT
-        self.est.update(dt, math.hypot(self.body.ax, self.body.ay))
+        self.est.update(dt)
         self.wind.update(dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:
             self.world.refresh_near(self.body.x, self.body.y)

@@ -7,6 +7,7 @@ import pytest
 
 from uavtest.analysis.fidelity import (
     NORMALISED_POINTS,
+    arrival_velocity_errors,
     compare,
     flight_figures,
     from_liftoff,
@@ -90,3 +91,29 @@ def test_pairs_and_spread():
     assert s.inside(spread([0.5, 2.5])) and not s.inside(spread([0.5, 2.0]))
     with pytest.raises(BadInput):
         spread([])
+
+
+def _leg_and_stop(bias_after_stop: tuple[float, float]) -> tuple[np.ndarray, ...]:
+    """A 50 m leg North at 5 m/s, a stop, 10 s of hover; the logged velocity carries ``bias``
+    once stopped while the position does not move (EKF2's velocity error)."""
+    t = np.arange(0.0, 30.0, 0.02)
+    vx = np.where(t < 10.0, 5.0, np.where(t < 12.0, 5.0 * (12.0 - t) / 2.0, 0.0))
+    x = np.cumsum(vx) * 0.02
+    y = np.zeros_like(t)
+    bx, by = bias_after_stop
+    est_vx = vx + np.where(t >= 12.0, bx, 0.0)
+    est_vy = np.where(t >= 12.0, by, 0.0)
+    return t, x, y, est_vx, est_vy
+
+
+def test_arrival_velocity_error_is_the_logged_velocity_against_the_positions_own_motion():
+    errors = arrival_velocity_errors(*_leg_and_stop((0.3, 0.4)))
+    assert errors == [pytest.approx(0.5, abs=0.02)]
+    assert arrival_velocity_errors(*_leg_and_stop((0.0, 0.0))) == [pytest.approx(0.0, abs=0.02)]
+
+
+def test_no_leg_no_arrival():
+    t = np.arange(0.0, 20.0, 0.02)
+    hover = np.zeros_like(t)
+    assert arrival_velocity_errors(t, hover, hover, hover + 0.5, hover) == []
+    assert arrival_velocity_errors(t[:10], hover[:10], hover[:10], hover[:10], hover[:10]) == []

@@ -192,27 +192,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: distance_sensor and the CP_* / MPC_POS_MODE parameters in the header) and COM_OBS_AVOID (a
 #: modelled parameter now: one more in the header and the parameter list); and for PX4 SIH's
 #: physics (SIH_KDV drag held by the velocity integrator), EKF2's velocity bias and
-#: FlightTaskAuto's track states (offtrack) with PX4's braking distance (2026-11-24).
+#: FlightTaskAuto's track states (offtrack) with PX4's braking distance (2026-11-24); and for
+#: EKF2's velocity error calibrated on PX4 SIH's ground truth (stationary, 0.22 m/s, 4 s) and
+#: waypoints accepted without a heading wait unless the item sets one (param4) (2026-11-25).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "960c2b2d68e5f10be99b19b299f6bee5242a4c3ded714f420cbeb52c46463a03",
-        "77c161157e409191ae1748979f9f683c9d1ca22a1d941464b3c118cae3661e35",
+        "91f4e23fe48701878a8bee2f3011c50faa209eb73865cc14ce2eb19b0dc1e79f",
+        "0f4c819434df605e65431c2480ac951efb9e9272506f10163011408923e0497c",
     ),
     "manual_and_rtl": (
-        "cfd0937ba7cafad8f00b01f91bacdd4f89cff1dd3418ec4d1882c807dab4c085",
-        "ab60a13b92fca00c3b649da3b138d3d318ccae16825d096b456ce282368af661",
+        "c14100647bf41d17ca2ce3534d8b7818ecb81d75cf2ac371a95bf95cdf469cef",
+        "27825e9e63cd2949a240018322d7ab59b6883b186f46277dcebdbf7af082471c",
     ),
     "datalink_loss": (
-        "da3f270c859df16c7f6e65459fb7ada4e11f2a9d37b06301cb35d0061783dc03",
-        "75702c23265cbb61b9d5624f5a7aa2531177be60e588e751b0b5bb77cf3fca39",
+        "0a80ef97d64ee6f7f7da4cf0d599f3a682a44c05af36aec02f9137e71aa6c844",
+        "6c800960392d8e2b4533738cece53a4c19fd2e6e483edd291d03e2d43101c813",
     ),
     "crash": (
-        "96f6806a26b05219379d0fba11c36b26129b9da5f98738e80dd54e18396f60b9",
-        "2a676d1fd3e5c1bc862613ff3c2f14aadd65a29f0ef56d4f4b5a9f64fc5f8a8c",
+        "983fc3a236b73d4bceb8700be5f0432b99319b4cbaa8767abba69a83fdd649d0",
+        "50043605f1aafa1d8bef1a0fcf7fc455060b893df922d15afbda23315174dda8",
     ),
     "params_and_commands": (
-        "9f4c9beb26f7287773cb2746c919041381557ef120362c3e5fb8399c1f421ad1",
-        "3cdef1d6f9ac91fc0f18983c684388352892b557b2aaedabea4b1d63982be019",
+        "235a45f29926dce0b91c48c358c94f0c9ee711c6de75fdf562cb20b72460d77a",
+        "16e30936f4e7115bfd9e72d67d7dde5fdf5b2ee92932dc7b872fb927885e2fef",
     ),
 }
 

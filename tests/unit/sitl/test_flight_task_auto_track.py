@@ -50,22 +50,31 @@ def test_the_velocity_bias_does_not_move_the_position_estimate() -> None:
     e = Estimator(random.Random(1))
     gaps, pos = [], []
     for _ in range(50 * 120):
-        e.update(0.02, acc=0.0)
+        e.update(0.02)
         gaps.append(e.evx - e._cvx)
         pos.append(e.ex)
-    # the bias is a tenth of a m/s, the position error stays bounded like a leaky integral of the rest
-    assert 0.05 < (sum(g * g for g in gaps) / len(gaps)) ** 0.5 < 0.3
+    # the bias is a fifth of a m/s, the position error stays bounded like a leaky integral of the rest
+    assert 0.1 < (sum(g * g for g in gaps) / len(gaps)) ** 0.5 < 0.35
     assert max(abs(p) for p in pos) < 1.0
     assert e.evx == pytest.approx(e._cvx + e.bx)  # the logged velocity error: integrated part + bias
 
 
-def test_the_bias_grows_while_the_vehicle_accelerates() -> None:
-    def rms(acc: float) -> float:
-        e = Estimator(random.Random(7))
-        xs = []
-        for _ in range(50 * 300):
-            e.update(0.02, acc=acc)
-            xs.append(e.bx)
-        return (sum(x * x for x in xs) / len(xs)) ** 0.5
+def test_the_velocity_error_is_as_large_and_as_slow_as_px4_sihs() -> None:
+    """PX4 v1.15 SIH against its own ground truth (square-mission.ulg): 0.19-0.21 m/s per axis,
+    autocorrelation 0.73-0.82 after 1 s and 0.15-0.41 after 3 s."""
+    e = Estimator(random.Random(7))
+    xs = []
+    for _ in range(50 * 1200):
+        e.update(0.02)
+        xs.append(e.evx)
+    n = len(xs)
+    mean = sum(xs) / n
+    var = sum((x - mean) ** 2 for x in xs) / n
 
-    assert rms(3.0) > 1.5 * rms(0.0)
+    def autocorr(lag_s: float) -> float:
+        k = int(lag_s * 50)
+        return sum((xs[i] - mean) * (xs[i + k] - mean) for i in range(n - k)) / ((n - k) * var)
+
+    assert 0.17 < math.sqrt(var) < 0.3
+    assert 0.65 < autocorr(1.0) < 0.9
+    assert 0.15 < autocorr(3.0) < 0.6

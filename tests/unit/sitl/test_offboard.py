@@ -190,7 +190,10 @@ def test_global_int_setpoint():
         s.v.receive(Msg("SET_POSITION_TARGET_GLOBAL_INT", f, *GCS))
 
     s.stream(12, each=send)
-    assert (s.v.body.x, s.v.body.y) == (pytest.approx(10.0, abs=0.4), pytest.approx(5.0, abs=0.4))
+    # the vehicle holds its *estimate* there; EKF2's velocity error holds it up to ~0.5 m off (as
+    # PX4 SIH against its ground truth), a wrong lat/lon conversion would be metres off
+    assert (s.v.st.x, s.v.st.y) == (pytest.approx(10.0, abs=0.6), pytest.approx(5.0, abs=0.6))
+    assert (s.v.body.x, s.v.body.y) == (pytest.approx(10.0, abs=0.8), pytest.approx(5.0, abs=0.8))
     assert s.v.body.z == pytest.approx(-7.0, abs=0.4)
 
     def send_amsl() -> None:

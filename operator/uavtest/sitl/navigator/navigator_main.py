@@ -5,9 +5,10 @@ queues events (mission item reached, mission finished, status texts). PX4 behavi
 
 - takeoff to ``max(item altitude, MIS_TAKEOFF_ALT)``, done within ``NAV_MC_ALT_RAD``;
 - a waypoint is reached within its acceptance radius (``NAV_ACC_RAD`` unless the item sets one)
-  and ``NAV_MC_ALT_RAD``; with ``MPC_YAW_MODE`` 0 the vehicle then turns towards the next
-  waypoint and waits until the heading error is below ``MIS_YAW_ERR`` (or ``MIS_YAW_TMT``
-  passes) before the item counts as reached; then it holds ``param1`` seconds;
+  and ``NAV_MC_ALT_RAD``; an item with a heading (param4, degrees) then waits until the heading
+  error is below ``MIS_YAW_ERR`` (or ``MIS_YAW_TMT`` passes) before it counts as reached, one
+  without (NaN, as QGC and the runner send) is reached at once (PX4 v1.15's
+  ``get_yaw_to_be_accepted``); then it holds ``param1`` seconds;
 - a waypoint is flown along the track from the previous one (``Goal.prev``, PX4's
   position_setpoint_triplet.previous): the controller's FlightTaskAuto states (offtrack, ...);
 - a land item first flies to its position at the current altitude (reached then, as PX4
@@ -420,16 +421,12 @@ class Navigator:
                     self.events.append(Event(EventKind.REACHED, self.current))
                     s.phase = Phase.DESCEND
                 else:
+                    # MissionBlock::is_mission_item_reached_or_completed: the heading is waited
+                    # for only when the item carries one (param4); QGC and the runner send NaN,
+                    # so PX4 accepts the waypoint at once and FlightTaskAuto turns on the way on
                     s.phase = Phase.YAW
                     s.since = now
-                    nxt = self._next_position(self.current, st)
-                    s.yaw = st.yaw
-                    if (
-                        nxt is not None
-                        and int(p["MPC_YAW_MODE"]) == 0
-                        and math.hypot(nxt[0] - s.x, nxt[1] - s.y) > 0.5
-                    ):
-                        s.yaw = math.atan2(nxt[1] - s.y, nxt[0] - s.x)
+                    s.yaw = math.radians(item.param4) if math.isfinite(item.param4) else math.nan
             else:
                 g = self._goal_set(GoalKind.POSITION, s.x, s.y, s.z)
                 if "prev_x" in s.extra:
@@ -437,8 +434,10 @@ class Navigator:
                 g.acc_rad = radius
                 return g
         if s.phase == Phase.YAW:
-            err = abs(wrap_pi(s.yaw - st.yaw))
+            err = abs(wrap_pi(s.yaw - st.yaw)) if math.isfinite(s.yaw) else 0.0
             timeout = p["MIS_YAW_TMT"]
+            if not math.isfinite(s.yaw):
+                s.yaw = st.yaw  # the heading held while the item's hold time runs
             if (
                 not self.yaw_acceptance
                 or err <= math.radians(p["MIS_YAW_ERR"])

@@ -1,0 +1,70 @@
+"""A waypoint's heading, as PX4 v1.15's navigator accepts it
+(MissionBlock::is_mission_item_reached_or_completed, Navigator::get_yaw_to_be_accepted): the heading
+is waited for only when the item carries one (param4);
+an item without (NaN, as QGroundControl and the runner send) is reached as soon as the vehicle is
+within NAV_ACC_RAD, whatever its heading."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from uavtest.px4.modes import AutoSubMode, MainMode
+from uavtest.sitl.geo import Projection
+from uavtest.sitl.inprocess import _command
+from uavtest.sitl.mav import MavCmd, MavFrame
+from uavtest.sitl.mission import NavItem
+from uavtest.sitl.vehicle import SimConfig, Vehicle
+from uavtest.spec.models import Home
+
+HOME = Home()
+
+
+def _items(param4: float) -> list[NavItem]:
+    """Takeoff, 30 m North, a corner to 30 m East (the next leg points East), land there."""
+    proj = Projection(HOME.lat, HOME.lon)
+    rel = MavFrame.GLOBAL_RELATIVE_ALT_INT
+
+    def at(seq: int, cmd: int, north: float, east: float, alt: float, p4: float = math.nan) -> NavItem:
+        lat, lon = proj.reproject(north, east)
+        return NavItem(seq, cmd, rel, param4=p4, x=round(lat * 1e7), y=round(lon * 1e7), z=alt)
+
+    return [
+        at(0, MavCmd.NAV_TAKEOFF, 0.0, 0.0, 10.0),
+        at(1, MavCmd.NAV_WAYPOINT, 30.0, 0.0, 10.0, param4),
+        at(2, MavCmd.NAV_WAYPOINT, 30.0, 30.0, 10.0),
+        at(3, MavCmd.NAV_LAND, 30.0, 30.0, 0.0),
+    ]
+
+
+def _heading_when_reached(param4: float, seq: int = 1) -> tuple[float, float]:
+    """(heading in degrees, seconds since the corner came within 1 m) when item ``seq`` is reached."""
+    config = SimConfig(home=HOME, params={"NAV_ACC_RAD": 1.0}, seed=3)
+    v = Vehicle(dataclasses.replace(config, links=()), None)
+    v.load_mission(_items(param4))
+    v.fly_until(lambda v: v.ready, 10_000_000)
+    assert _command(v, MavCmd.COMPONENT_ARM_DISARM, 1.0) == 0
+    _command(v, MavCmd.DO_SET_MODE, 1.0, float(MainMode.AUTO), float(AutoSubMode.MISSION))
+    near = None
+    for _ in range(3000):
+        out = v.advance(v.time_us + 20_000)
+        if near is None and math.hypot(v.st.x - 30.0, v.st.y) < 1.0:
+            near = v.time_us / 1e6
+        for m in out:
+            if m.name == "MISSION_ITEM_REACHED" and int(m.fields["seq"]) == seq:
+                assert near is not None
+                return math.degrees(v.st.yaw) % 360.0, v.time_us / 1e6 - near
+    raise AssertionError(f"item {seq} never reached")
+
+
+def test_a_waypoint_without_heading_is_reached_at_once_whatever_the_heading() -> None:
+    heading, waited = _heading_when_reached(math.nan)
+    # still facing North along the first leg (MPC_YAW_MODE 0), not yet turned East
+    assert heading < 30.0 or heading > 330.0, heading
+    assert waited < 1.0
+
+
+def test_a_waypoint_with_a_heading_waits_for_it_within_mis_yaw_err() -> None:
+    heading, waited = _heading_when_reached(180.0)
+    assert abs(heading - 180.0) <= 12.0 + 0.5, heading  # MIS_YAW_ERR 12 deg
+    assert waited > 2.0  # a 180 deg turn at MPC_YAWRAUTO_MAX 45 deg/s
