@@ -27,6 +27,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
 from pyulog import ULog
 from rich.console import Console
 from rich.table import Table
@@ -38,7 +39,9 @@ from uavtest.analysis.fidelity import (
     flight_figures,
     pairs_between,
     pairs_within,
+    pooled_autocorrelation,
     spread,
+    velocity_errors,
 )
 from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
 from uavtest.sitl.geo import Projection
@@ -106,6 +109,8 @@ class Flights:
     figures: list[FlightFigures]
     #: EKF2's horizontal velocity error on each arrival, every flight's together (m/s)
     arrival_errors: list[float]
+    #: EKF2's velocity error per axis and flight at 10 Hz (``velocity_errors``)
+    error_series: list = dataclasses.field(default_factory=list)
 
 
 def _measure(ulog: ULog, into: Flights) -> None:
@@ -114,6 +119,8 @@ def _measure(ulog: ULog, into: Flights) -> None:
     lp = ulog.get_dataset("vehicle_local_position").data
     t = lp["timestamp"] / 1e6
     air = (t >= traj.t[0]) & (t <= traj.t[-1])
+    window = [lp[k][air] if k != "timestamp" else t[air] for k in ("timestamp", "x", "y", "vx", "vy")]
+    into.error_series += [e for e in velocity_errors(*window) if len(e)]
     into.arrival_errors += arrival_velocity_errors(
         *(lp[k][air] if k != "timestamp" else t[air] for k in ("timestamp", "x", "y", "vx", "vy"))
     )
@@ -170,9 +177,23 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
     if px4_all.arrival_errors and ours_all.arrival_errors:
         a_px4, a_ours = px4_all.arrival_errors, ours_all.arrival_errors
         t.add_row(
-            "EKF2 velocity error on arrival, median (range), m/s",
+            "EKF2 velocity error on arrival, m/s",
             f"{statistics.median(a_px4):.2f} ({min(a_px4):.2f}–{max(a_px4):.2f})",
             f"{statistics.median(a_ours):.2f} ({min(a_ours):.2f}–{max(a_ours):.2f})",
+            "",
+            "",
+        )
+    if px4_all.error_series and ours_all.error_series:
+
+        def stats(series: list) -> str:
+            std = float(np.concatenate(series).std())
+            acs = "/".join(f"{pooled_autocorrelation(series, 10 * k):.2f}" for k in (1, 2, 3, 5))
+            return f"{std:.2f}; {acs}"
+
+        t.add_row(
+            "EKF2 velocity error std, m/s; autocorr. 1/2/3/5 s",
+            stats(px4_all.error_series),
+            stats(ours_all.error_series),
             "",
             "",
         )

@@ -56,7 +56,9 @@ __all__ = [
     "normalised",
     "pairs_between",
     "pairs_within",
+    "pooled_autocorrelation",
     "spread",
+    "velocity_errors",
 ]
 
 NORMALISED_POINTS = 200
@@ -136,6 +138,31 @@ def flight_figures(flight: Trajectory, points: int = NORMALISED_POINTS) -> Fligh
     dt = f.duration / (points - 1)
     speed = np.hypot(np.gradient(path[:, 0], dt), np.gradient(path[:, 1], dt))
     return FlightFigures(flight_time=f.duration, jitter=_jitter(f), path=path, speed=speed)
+
+
+def velocity_errors(
+    t: np.ndarray, x: np.ndarray, y: np.ndarray, vx: np.ndarray, vy: np.ndarray, rate: float = 10.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per axis, the logged velocity minus the logged position's own displacement over 1 s,
+    sampled at ``rate`` Hz over the window (empty when it is shorter than 2 s)."""
+    if len(t) < 2 or t[-1] - t[0] < 2.0:
+        return np.empty(0), np.empty(0)
+    g = np.arange(t[0] + 0.5, t[-1] - 0.5, 1.0 / rate)
+    ex = np.interp(g, t, vx) - (np.interp(g + 0.5, t, x) - np.interp(g - 0.5, t, x))
+    ey = np.interp(g, t, vy) - (np.interp(g + 0.5, t, y) - np.interp(g - 0.5, t, y))
+    return ex, ey
+
+
+def pooled_autocorrelation(series: Sequence[np.ndarray], lag: int) -> float:
+    """The autocorrelation at ``lag`` samples of several series pooled (each about its own mean)."""
+    num = den = 0.0
+    for s in series:
+        if len(s) <= lag:
+            continue
+        c = s - s.mean()
+        num += float(np.sum(c[:-lag] * c[lag:])) if lag else float(np.sum(c * c))
+        den += float(np.sum(c * c)) * (len(c) - lag) / len(c)
+    return num / den if den > 0 else float("nan")
 
 
 def arrival_velocity_errors(

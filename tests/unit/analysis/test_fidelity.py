@@ -13,7 +13,9 @@ from uavtest.analysis.fidelity import (
     from_liftoff,
     pairs_between,
     pairs_within,
+    pooled_autocorrelation,
     spread,
+    velocity_errors,
 )
 from uavtest.analysis.trajectory import Trajectory
 from uavtest.errors import BadInput
@@ -117,3 +119,21 @@ def test_no_leg_no_arrival():
     hover = np.zeros_like(t)
     assert arrival_velocity_errors(t, hover, hover, hover + 0.5, hover) == []
     assert arrival_velocity_errors(t[:10], hover[:10], hover[:10], hover[:10], hover[:10]) == []
+
+
+def test_velocity_errors_see_a_velocity_the_position_does_not_follow():
+    t = np.arange(0.0, 20.0, 0.02)
+    x = 2.0 * t  # flying North at 2 m/s
+    y = np.zeros_like(t)
+    ex, ey = velocity_errors(t, x, y, np.full_like(t, 2.3), np.full_like(t, -0.1))
+    assert np.allclose(ex, 0.3) and np.allclose(ey, -0.1)
+    assert [len(e) for e in velocity_errors(t[:50], x[:50], y[:50], x[:50], y[:50])] == [0, 0]
+
+
+def test_pooled_autocorrelation_of_a_slow_and_a_white_process():
+    rng = np.random.default_rng(1)
+    white = [rng.normal(size=5000) for _ in range(3)]
+    slow = [np.convolve(w, np.ones(50) / 50, mode="valid") for w in white]
+    assert abs(pooled_autocorrelation(white, 10)) < 0.05
+    assert pooled_autocorrelation(slow, 10) == pytest.approx(0.8, abs=0.05)  # 40/50 overlap
+    assert pooled_autocorrelation(slow, 0) == pytest.approx(1.0)
