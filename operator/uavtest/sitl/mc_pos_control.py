@@ -362,6 +362,12 @@ class Controller:
             self.vz = max(ramped, vd)
             self.pz = z
             target_yaw = goal.yaw
+            if math.isnan(target_yaw) and lim.yaw_mode == 0:
+                # FlightTaskAuto::_set_heading_from_mode in the takeoff too: drifted farther than
+                # the acceptance radius from the takeoff point, the vehicle turns to face it
+                d = math.hypot(goal.x - x, goal.y - y)
+                if d > lim.acc_rad:
+                    target_yaw = math.atan2(goal.y - y, goal.x - x)
             ax, ay = self._xy_loops(dt, x, y, vx, vy)
             az = self._z_loops(dt, z, vz, False)
         elif kind is GoalKind.LAND:

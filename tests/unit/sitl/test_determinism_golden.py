@@ -194,11 +194,13 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: physics (SIH_KDV drag held by the velocity integrator), EKF2's velocity bias and
 #: FlightTaskAuto's track states (offtrack) with PX4's braking distance (2026-11-24); and for
 #: EKF2's velocity error calibrated on PX4 SIH's ground truth (stationary, 0.22 m/s, 4 s) and
-#: waypoints accepted without a heading wait unless the item sets one (param4) (2026-11-25).
+#: waypoints accepted without a heading wait unless the item sets one (param4), and a mission
+#: takeoff without a heading turning to face its takeoff point once drifted past NAV_ACC_RAD
+#: (FlightTaskAuto's MPC_YAW_MODE 0) (2026-11-25).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "91f4e23fe48701878a8bee2f3011c50faa209eb73865cc14ce2eb19b0dc1e79f",
-        "0f4c819434df605e65431c2480ac951efb9e9272506f10163011408923e0497c",
+        "5efe6e83587c853af3fd19284ede903013e001d000a5222c9f00325c5465a6b0",
+        "fec66c06f9691133133c00b9da263f5a4834dd597e1dcb6c03b95dd65575a1ec",
     ),
     "manual_and_rtl": (
         "c14100647bf41d17ca2ce3534d8b7818ecb81d75cf2ac371a95bf95cdf469cef",
@@ -209,8 +211,8 @@ GOLDEN: dict[str, tuple[str, str]] = {
         "6c800960392d8e2b4533738cece53a4c19fd2e6e483edd291d03e2d43101c813",
     ),
     "crash": (
-        "983fc3a236b73d4bceb8700be5f0432b99319b4cbaa8767abba69a83fdd649d0",
-        "50043605f1aafa1d8bef1a0fcf7fc455060b893df922d15afbda23315174dda8",
+        "d9d84b57e0da4a1051213c3886011acc8720be5fed5981d66e14508bc6c2c5d4",
+        "8db2bfc670684f25e3893bff30dacce4fc4dfa38c3c2a095bb8b7343f5770864",
     ),
     "params_and_commands": (
         "235a45f29926dce0b91c48c358c94f0c9ee711c6de75fdf562cb20b72460d77a",

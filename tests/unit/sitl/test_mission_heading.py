@@ -9,6 +9,8 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import pytest
+
 from uavtest.px4.modes import AutoSubMode, MainMode
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.inprocess import _command
@@ -68,3 +70,22 @@ def test_a_waypoint_with_a_heading_waits_for_it_within_mis_yaw_err() -> None:
     heading, waited = _heading_when_reached(180.0)
     assert abs(heading - 180.0) <= 12.0 + 0.5, heading  # MIS_YAW_ERR 12 deg
     assert waited > 2.0  # a 180 deg turn at MPC_YAWRAUTO_MAX 45 deg/s
+
+
+def _takeoff_yaw_setpoint(drift_east: float, goal_yaw: float) -> float:
+    from uavtest.sitl.mc_pos_control import Controller, Goal, GoalKind, Limits
+    from uavtest.sitl.params import ParamStore
+
+    ctrl = Controller(Limits.of(ParamStore({"NAV_ACC_RAD": 0.5})))
+    ctrl.reset(0.0, drift_east, -3.0, 0.0, 0.0, 0.0, 0.0)
+    goal = Goal(GoalKind.TAKEOFF, x=0.0, y=0.0, z=-10.0, yaw=goal_yaw)
+    ctrl.update(0.004, goal, 0.0, drift_east, -3.0, 0.0, 0.0, -1.0, 0.0)
+    return math.degrees(ctrl.yaw_sp)
+
+
+def test_a_takeoff_without_heading_turns_to_the_takeoff_point_once_drifted_past_nav_acc_rad() -> None:
+    """FlightTaskAuto::_set_heading_from_mode (MPC_YAW_MODE 0) in the takeoff: PX4 v1.15 SIH swings
+    round in two of its four mission1 takeoffs."""
+    assert _takeoff_yaw_setpoint(0.3, math.nan) == 0.0  # inside the radius: heading held
+    assert _takeoff_yaw_setpoint(0.6, math.nan) == pytest.approx(-90.0)  # 0.6 m East: face West, back to it
+    assert _takeoff_yaw_setpoint(0.6, math.radians(30.0)) == pytest.approx(30.0)  # the item's heading

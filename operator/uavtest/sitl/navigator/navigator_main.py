@@ -382,6 +382,8 @@ class Navigator:
                     s.x, s.y = st.x, st.y
                     s.z = -max(-s.z, p["MIS_TAKEOFF_ALT"])
                     s.phase = Phase.TAKEOFF
+                    # the item's heading (param4); NaN: FlightTaskAuto's MPC_YAW_MODE decides
+                    s.yaw = math.radians(item.param4) if math.isfinite(item.param4) else math.nan
                     self.events.append(
                         Event(EventKind.TEXT, (MavSeverity.INFO, f"Climb to {-s.z:.1f} meters above home"))
                     )
@@ -395,6 +397,7 @@ class Navigator:
                 elif st.landed:
                     s.extra.update(after_takeoff=1.0, tx=st.x, ty=st.y)
                     s.phase = Phase.TAKEOFF
+                    s.yaw = math.nan  # Mission's climb work item: "FlightTaskAuto handles yaw directly"
                 else:
                     s.phase = Phase.FLY
         if s.phase == Phase.TAKEOFF:
