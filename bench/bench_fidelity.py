@@ -121,9 +121,7 @@ def _measure(ulog: ULog, into: Flights) -> None:
     air = (t >= traj.t[0]) & (t <= traj.t[-1])
     window = [lp[k][air] if k != "timestamp" else t[air] for k in ("timestamp", "x", "y", "vx", "vy")]
     into.error_series += [e for e in velocity_errors(*window) if len(e)]
-    into.arrival_errors += arrival_velocity_errors(
-        *(lp[k][air] if k != "timestamp" else t[air] for k in ("timestamp", "x", "y", "vx", "vy"))
-    )
+    into.arrival_errors += arrival_velocity_errors(*window)
 
 
 def px4_flights(names: list[str]) -> Flights:

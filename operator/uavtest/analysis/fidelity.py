@@ -171,17 +171,14 @@ def arrival_velocity_errors(
     """The horizontal velocity error on each arrival (module docstring), in time order.
 
     ``t`` (s), ``x``, ``y`` (m) and ``vx``, ``vy`` (m/s): the logged (estimated) position and
-    velocity over the flight window; a window that starts or ends inside the 1 s displacement is
-    left out, so an estimator reset before takeoff does not count.
+    velocity over the flight window; an arrival whose window runs past its end is left out.
     """
     if len(t) < 2 or t[-1] - t[0] < 2 * ARRIVAL_WINDOW:
         return []
+    ex, ey = velocity_errors(t, x, y, vx, vy, rate=ARRIVAL_RATE)
     g = np.arange(t[0] + 0.5, t[-1] - 0.5, 1.0 / ARRIVAL_RATE)
-    gvx, gvy = np.interp(g, t, vx), np.interp(g, t, vy)
-    dx = np.interp(g + 0.5, t, x) - np.interp(g - 0.5, t, x)
-    dy = np.interp(g + 0.5, t, y) - np.interp(g - 0.5, t, y)
-    err = np.hypot(gvx - dx, gvy - dy)
-    speed = np.hypot(gvx, gvy)
+    err = np.hypot(ex, ey)
+    speed = np.hypot(np.interp(g, t, vx), np.interp(g, t, vy))
     out: list[float] = []
     i, n = 0, len(g)
     while i < n:
