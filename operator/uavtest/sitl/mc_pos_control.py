@@ -13,7 +13,8 @@ What gives PX4 its flight times, modelled after PX4 v1.15's ``mc_pos_control`` a
   loops turn the reference into an acceleration command, limited by the tilt ``MPC_TILTMAX_AIR``;
 - vertical speeds ``MPC_Z_V_AUTO_UP/DN``, takeoff ``MPC_TKO_SPEED`` after a ``MPC_TKO_RAMP_T``
   ramp, landing ``MPC_LAND_SPEED`` below ``MPC_LAND_ALT2`` (interpolated up to ``MPC_LAND_ALT1``)
-  and ``MPC_LAND_CRWL`` below ``MPC_LAND_ALT3`` (PX4 SIH has a range finder);
+  and ``MPC_LAND_CRWL`` below ``MPC_LAND_ALT3`` (PX4 SIH has a range finder), the descent
+  tracking the integrated altitude of that speed profile as PX4's PositionSmoothing does;
 - yaw towards the target (``MPC_YAW_MODE`` 0) at ``MPC_YAWRAUTO_MAX``.
 """
 
@@ -384,10 +385,14 @@ class Controller:
                 v = min(lim.land_crawl, lim.land_speed)
             step = lim.acc_down * dt
             self.vz += max(-step, min(step, v - self.vz))
-            self.pz = z
+            # FlightTaskAuto::_prepareLandSetpoints gives PositionSmoothing a velocity target
+            # only (z NaN), but the smoothed trajectory integrates its own position and
+            # PositionControl tracks both: a vehicle lagging the descent catches up (PX4 SIH's
+            # descent from 10 m takes ~14 s, not the ~18 s of velocity control alone)
+            self.pz += self.vz * dt
             target_yaw = goal.yaw
             ax, ay = self._xy_loops(dt, x, y, vx, vy)
-            az = self._z_loops(dt, z, vz, False)
+            az = self._z_loops(dt, z, vz, True)
         elif kind is GoalKind.OFFBOARD:
             return self._offboard(dt, goal, x, y, z, vx, vy, vz, yaw)
         else:

@@ -153,7 +153,7 @@ class Vehicle:
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed, config.range_sensor)
-        land_jitter = variation.uniform(0.0, 0.8)
+        land_jitter = variation.uniform(0.35, 0.75)  # touchdown to PX4's ground-contact conditions, s
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
         self.land = LandDetector(self.params, self.ctrl, land_jitter)

@@ -196,27 +196,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: EKF2's velocity error calibrated on PX4 SIH's ground truth (stationary, 0.22 m/s, 4 s) and
 #: waypoints accepted without a heading wait unless the item sets one (param4), and a mission
 #: takeoff without a heading turning to face its takeoff point once drifted past NAV_ACC_RAD
-#: (FlightTaskAuto's MPC_YAW_MODE 0) (2026-11-25).
+#: (FlightTaskAuto's MPC_YAW_MODE 0) (2026-11-25); and for the landing descent tracking its
+#: integrated z trajectory (PositionSmoothing) and the land detector's hysteresis steps of
+#: LNDMC_TRIG_TIME / 3 after touchdown (2026-11-25, later).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "5efe6e83587c853af3fd19284ede903013e001d000a5222c9f00325c5465a6b0",
-        "fec66c06f9691133133c00b9da263f5a4834dd597e1dcb6c03b95dd65575a1ec",
+        "ba5b9358e9861494d7e608b9824384a92f606aac69cfc0806beab9a2b088cd5a",
+        "6a34ace6ccde41c1418d938fdfe06edfe3cdbb2757378e86557716531e8e9dea",
     ),
     "manual_and_rtl": (
-        "c14100647bf41d17ca2ce3534d8b7818ecb81d75cf2ac371a95bf95cdf469cef",
-        "27825e9e63cd2949a240018322d7ab59b6883b186f46277dcebdbf7af082471c",
+        "72fe4d0d4ecae96958e591e3c1dd818d4394a7fd31a73fa66257f43324ea286c",
+        "793b46a58d2300bdd3b2db317f1e3100dd0e3ed3fd83259651ac3062d3dd0c55",
     ),
     "datalink_loss": (
-        "0a80ef97d64ee6f7f7da4cf0d599f3a682a44c05af36aec02f9137e71aa6c844",
-        "6c800960392d8e2b4533738cece53a4c19fd2e6e483edd291d03e2d43101c813",
+        "9cefa23b0f0f387b753f5bf1d0d14e78c4d13f0be3be4056c89738b5fb8f7564",
+        "46deb813e9b012f2c16f4f179e1793e65a16f93131c404b048ba045518993e7b",
     ),
     "crash": (
         "d9d84b57e0da4a1051213c3886011acc8720be5fed5981d66e14508bc6c2c5d4",
         "8db2bfc670684f25e3893bff30dacce4fc4dfa38c3c2a095bb8b7343f5770864",
     ),
     "params_and_commands": (
-        "235a45f29926dce0b91c48c358c94f0c9ee711c6de75fdf562cb20b72460d77a",
-        "16e30936f4e7115bfd9e72d67d7dde5fdf5b2ee92932dc7b872fb927885e2fef",
+        "c8040d4925995e2e985fa9096e81bd89b416859c4c087bdead308eb48825ff07",
+        "ab560b89372741154a2518d7ceefe94b90a6f961fa14f1aba9a38e33cd6262e2",
     ),
 }
 
