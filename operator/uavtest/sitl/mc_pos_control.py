@@ -186,6 +186,24 @@ def track_target(goal: Goal, x: float, y: float, acc_rad: float) -> tuple[float,
     return goal.x, goal.y, False
 
 
+def l1_point(
+    px: float, py: float, tx: float, ty: float, x: float, y: float, acc_rad: float
+) -> tuple[float, float]:
+    """``PositionSmoothing::_getL1Point``: on the line from (px, py) to the target, the point an
+    L1 distance of max(acceptance radius, 5 m) from (x, y) past its closest point."""
+    ux, uy = tx - px, ty - py
+    n = math.hypot(ux, uy)
+    if n < 1e-6:
+        return tx, ty
+    ux, uy = ux / n, uy / n
+    along = (x - px) * ux + (y - py) * uy
+    cx, cy = px + ux * along, py + uy * along
+    cross = math.hypot(cx - x, cy - y)
+    l1 = max(acc_rad, 5.0)
+    ahead = math.sqrt(l1 * l1 - cross * cross) if l1 > cross else 0.0
+    return cx + ahead * ux, cy + ahead * uy
+
+
 def turn_speed(
     x: float, y: float, tx: float, ty: float, nx: float, ny: float, acc: float, acc_rad: float
 ) -> float:
@@ -231,11 +249,21 @@ class Controller:
         self.yawrate_sp = 0.0
         self.ramp = 0.0
         self.stretch = 1.0
+        self.speed_prev = 0.0  # PositionSmoothing's _max_speed_previous
 
     # ------------------------------------------------------------------ horizontal reference
 
     def _xy_reference(
-        self, dt: float, tx: float, ty: float, speed: float, x: float, y: float, final: float = 0.0
+        self,
+        dt: float,
+        tx: float,
+        ty: float,
+        speed: float,
+        x: float,
+        y: float,
+        final: float = 0.0,
+        acc_rad: float = 0.0,
+        line: tuple[float, float] | None = None,
     ) -> None:
         lim = self.lim
         # PositionSmoothing::_generateTrajectory: while the drone is behind the trajectory, its
@@ -248,6 +276,19 @@ class Controller:
         ex, ey = tx - self.px, ty - self.py
         dist = math.hypot(ex, ey)
         vmax = min(speed, max_speed_from_distance(lim.jerk, lim.acc_hor, dist, final))
+        # PositionSmoothing::_isTurning: the trajectory's velocity more than ~11 degrees off the
+        # direction to the target (and faster than 0.2 m/s, outside the acceptance radius) is a
+        # turn: its speed stays at what it was when the turn began (_max_speed_previous) and it
+        # aims at the L1 point 5 m down the line from ``line`` (the previous waypoint) to the target
+        v = math.hypot(self.vx, self.vy)
+        if v > 0.2 and dist > acc_rad and (self.vx * ex + self.vy * ey) < 0.98 * v * dist:
+            vmax = min(vmax, self.speed_prev)
+            if line is not None:
+                ex, ey = l1_point(line[0], line[1], tx, ty, self.px, self.py, acc_rad)
+                ex, ey = ex - self.px, ey - self.py
+                dist = math.hypot(ex, ey)
+        else:
+            self.speed_prev = vmax
         if dist > 1e-6:
             vdx, vdy = ex / dist * vmax, ey / dist * vmax
         else:
@@ -340,7 +381,12 @@ class Controller:
             tx, ty, via = track_target(goal, x, y, acc_rad)
             if via:  # an internal waypoint before the target: PX4's speed through it
                 speed = min(speed, turn_speed(x, y, tx, ty, goal.x, goal.y, lim.acc_hor, acc_rad))
-            self._xy_reference(dt, tx, ty, speed, x, y, final=0.0 if not via else speed)
+            # the line the trajectory follows: from the previous waypoint, or from where the
+            # vehicle is when it heads for an internal waypoint first (FlightTaskAuto's _prev_wp)
+            line = (x, y) if via else (goal.prev if goal.prev[0] == goal.prev[0] else None)
+            self._xy_reference(
+                dt, tx, ty, speed, x, y, final=0.0 if not via else speed, acc_rad=acc_rad, line=line
+            )
             self._z_reference(dt, goal.z)
             target_yaw = goal.yaw
             if math.isnan(target_yaw) and lim.yaw_mode == 0:
@@ -352,7 +398,7 @@ class Controller:
             ax, ay = self._xy_loops(dt, x, y, vx, vy)
             az = self._z_loops(dt, z, vz, True)
         elif kind is GoalKind.TAKEOFF:
-            self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y)
+            self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad)
             self.ramp += dt
             climb = min(lim.tko_speed, lim.z_up)
             dz = goal.z - z
@@ -372,7 +418,7 @@ class Controller:
             ax, ay = self._xy_loops(dt, x, y, vx, vy)
             az = self._z_loops(dt, z, vz, False)
         elif kind is GoalKind.LAND:
-            self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y)
+            self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad)
             h = -z
             if h > lim.land_alt1:
                 v = lim.z_down

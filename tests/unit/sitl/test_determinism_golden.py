@@ -198,15 +198,16 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: takeoff without a heading turning to face its takeoff point once drifted past NAV_ACC_RAD
 #: (FlightTaskAuto's MPC_YAW_MODE 0) (2026-11-25); and for the landing descent tracking its
 #: integrated z trajectory (PositionSmoothing) and the land detector's hysteresis steps of
-#: LNDMC_TRIG_TIME / 3 after touchdown (2026-11-25, later).
+#: LNDMC_TRIG_TIME / 3 after touchdown; and for PositionSmoothing's turn: the speed held while
+#: the trajectory is not aligned with its target, aiming at the L1 point (2026-11-25, later).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "ba5b9358e9861494d7e608b9824384a92f606aac69cfc0806beab9a2b088cd5a",
-        "6a34ace6ccde41c1418d938fdfe06edfe3cdbb2757378e86557716531e8e9dea",
+        "3e1dbab13beedb06f803f1265da10b23fdfb4fa7888d5b8361e79e507fe6e20b",
+        "b379bfcb3cc5b980951466b9c2383ac6c97055550c339276cc28f558b69016d3",
     ),
     "manual_and_rtl": (
-        "72fe4d0d4ecae96958e591e3c1dd818d4394a7fd31a73fa66257f43324ea286c",
-        "793b46a58d2300bdd3b2db317f1e3100dd0e3ed3fd83259651ac3062d3dd0c55",
+        "57859f10668c1611772efa75e5c74005197320021818852f960603f9ec42a270",
+        "5852ce2569b3f93172814c23fc471576b56aba052df5391298a2714724f34fc0",
     ),
     "datalink_loss": (
         "9cefa23b0f0f387b753f5bf1d0d14e78c4d13f0be3be4056c89738b5fb8f7564",

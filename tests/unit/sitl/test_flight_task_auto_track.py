@@ -9,7 +9,17 @@ import random
 import pytest
 
 from uavtest.sitl.ekf2 import Estimator
-from uavtest.sitl.mc_pos_control import Goal, GoalKind, max_speed_from_distance, track_target, turn_speed
+from uavtest.sitl.mc_pos_control import (
+    Controller,
+    Goal,
+    GoalKind,
+    Limits,
+    l1_point,
+    max_speed_from_distance,
+    track_target,
+    turn_speed,
+)
+from uavtest.sitl.params import ParamStore
 
 
 def _leg() -> Goal:
@@ -78,3 +88,29 @@ def test_the_velocity_error_is_as_large_and_as_slow_as_px4_sihs() -> None:
     assert 0.17 < math.sqrt(var) < 0.3
     assert 0.65 < autocorr(1.0) < 0.9
     assert 0.15 < autocorr(3.0) < 0.6
+
+
+def test_l1_point_is_five_metres_down_the_line_from_the_closest_point() -> None:
+    # PositionSmoothing::_getL1Point: 2 m beside the line, L1 5 m: sqrt(25 - 4) past the closest point
+    assert l1_point(0.0, 0.0, 0.0, 50.0, 2.0, 10.0, 0.5) == pytest.approx((0.0, 10.0 + math.sqrt(21.0)))
+    # farther off than L1: the closest point itself
+    assert l1_point(0.0, 0.0, 0.0, 50.0, 6.0, 10.0, 0.5) == pytest.approx((0.0, 10.0))
+
+
+def _turning_reference(speed_prev: float) -> float:
+    """The trajectory's speed after 1.5 s heading east for a target 50 m north, having been
+    flying east at 3 m/s: a turn (PositionSmoothing::_isTurning)."""
+    c = Controller(Limits.of(ParamStore()))
+    c.reset(0.0, 0.0, -10.0, 0.0, 3.0, 0.0, 0.0)
+    c.speed_prev = speed_prev
+    for _ in range(75):
+        c._xy_reference(0.02, 50.0, c.py, 5.0, c.px, c.py, acc_rad=0.5, line=(0.0, c.py))
+    return math.hypot(c.vx, c.vy)
+
+
+def test_a_turn_holds_the_speed_it_began_with() -> None:
+    # PX4 v1.15 keeps _max_speed_previous while the trajectory's velocity is more than ~11 degrees
+    # off the direction to the target: after a corner the vehicle creeps until it is aligned
+    assert _turning_reference(1.0) == pytest.approx(1.0, abs=0.35)
+    # a turn begun at cruise speed keeps cruise speed
+    assert _turning_reference(5.0) > 3.0
