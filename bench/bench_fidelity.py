@@ -36,6 +36,7 @@ from uavtest.analysis.fidelity import (
     FIGURES,
     FlightFigures,
     arrival_velocity_errors,
+    displacement_errors,
     flight_figures,
     pairs_between,
     pairs_within,
@@ -111,6 +112,8 @@ class Flights:
     arrival_errors: list[float]
     #: EKF2's velocity error per axis and flight at 10 Hz (``velocity_errors``)
     error_series: list = dataclasses.field(default_factory=list)
+    #: its vertical velocity error per flight at 10 Hz (``displacement_errors`` of z, vz)
+    vertical_series: list = dataclasses.field(default_factory=list)
 
 
 def _measure(ulog: ULog, into: Flights) -> None:
@@ -122,6 +125,9 @@ def _measure(ulog: ULog, into: Flights) -> None:
     window = [lp[k][air] if k != "timestamp" else t[air] for k in ("timestamp", "x", "y", "vx", "vy")]
     into.error_series += [e for e in velocity_errors(*window) if len(e)]
     into.arrival_errors += arrival_velocity_errors(*window)
+    vertical = displacement_errors(t[air], lp["z"][air], lp["vz"][air])
+    if len(vertical):
+        into.vertical_series.append(vertical)
 
 
 def px4_flights(names: list[str]) -> Flights:
@@ -140,6 +146,13 @@ def builtin_flights(plan: Plan, seeds: int) -> tuple[Flights, float]:
         fly_mission(config, items, sink=sink)
         _measure(ULog(io.BytesIO(sink.logs[0])), out)
     return out, time.perf_counter() - start
+
+
+def _error_stats(series: list) -> str:
+    """Standard deviation and pooled autocorrelation at 1/2/3/5 s of 10 Hz error series."""
+    std = float(np.concatenate(series).std())
+    acs = "/".join(f"{pooled_autocorrelation(series, 10 * k):.2f}" for k in (1, 2, 3, 5))
+    return f"{std:.2f}; {acs}"
 
 
 def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
@@ -182,16 +195,18 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "",
         )
     if px4_all.error_series and ours_all.error_series:
-
-        def stats(series: list) -> str:
-            std = float(np.concatenate(series).std())
-            acs = "/".join(f"{pooled_autocorrelation(series, 10 * k):.2f}" for k in (1, 2, 3, 5))
-            return f"{std:.2f}; {acs}"
-
         t.add_row(
             "EKF2 velocity error std, m/s; autocorr. 1/2/3/5 s",
-            stats(px4_all.error_series),
-            stats(ours_all.error_series),
+            _error_stats(px4_all.error_series),
+            _error_stats(ours_all.error_series),
+            "",
+            "",
+        )
+    if px4_all.vertical_series and ours_all.vertical_series:
+        t.add_row(
+            "EKF2 vertical velocity error std, m/s; autocorr. 1/2/3/5 s",
+            _error_stats(px4_all.vertical_series),
+            _error_stats(ours_all.vertical_series),
             "",
             "",
         )

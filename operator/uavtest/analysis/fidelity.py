@@ -51,6 +51,7 @@ __all__ = [
     "Spread",
     "arrival_velocity_errors",
     "compare",
+    "displacement_errors",
     "flight_figures",
     "from_liftoff",
     "normalised",
@@ -140,17 +141,20 @@ def flight_figures(flight: Trajectory, points: int = NORMALISED_POINTS) -> Fligh
     return FlightFigures(flight_time=f.duration, jitter=_jitter(f), path=path, speed=speed)
 
 
+def displacement_errors(t: np.ndarray, p: np.ndarray, v: np.ndarray, rate: float = 10.0) -> np.ndarray:
+    """One axis: the logged velocity minus the logged position's own displacement over 1 s,
+    sampled at ``rate`` Hz over the window (empty when it is shorter than 2 s)."""
+    if len(t) < 2 or t[-1] - t[0] < 2.0:
+        return np.empty(0)
+    g = np.arange(t[0] + 0.5, t[-1] - 0.5, 1.0 / rate)
+    return np.interp(g, t, v) - (np.interp(g + 0.5, t, p) - np.interp(g - 0.5, t, p))
+
+
 def velocity_errors(
     t: np.ndarray, x: np.ndarray, y: np.ndarray, vx: np.ndarray, vy: np.ndarray, rate: float = 10.0
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Per axis, the logged velocity minus the logged position's own displacement over 1 s,
-    sampled at ``rate`` Hz over the window (empty when it is shorter than 2 s)."""
-    if len(t) < 2 or t[-1] - t[0] < 2.0:
-        return np.empty(0), np.empty(0)
-    g = np.arange(t[0] + 0.5, t[-1] - 0.5, 1.0 / rate)
-    ex = np.interp(g, t, vx) - (np.interp(g + 0.5, t, x) - np.interp(g - 0.5, t, x))
-    ey = np.interp(g, t, vy) - (np.interp(g + 0.5, t, y) - np.interp(g - 0.5, t, y))
-    return ex, ey
+    """Per horizontal axis, ``displacement_errors``."""
+    return displacement_errors(t, x, vx, rate), displacement_errors(t, y, vy, rate)
 
 
 def pooled_autocorrelation(series: Sequence[np.ndarray], lag: int) -> float:

@@ -235,6 +235,8 @@ class Controller:
         ) = None
         #: MPC_POS_MODE 0 (FlightTaskManualPosition): the stick velocity straight to the velocity
         #: loop, the position locked once slower than ``hold_max_xy`` (MPC_HOLD_MAX_XY); set by the vehicle
+        #: distance to the ground from the range finder (m), NaN without one
+        self.dist_bottom = math.nan
         self.direct_velocity = False
         self.hold_max_xy = 0.8
         self.xy_locked = False
@@ -419,7 +421,9 @@ class Controller:
             az = self._z_loops(dt, z, vz, False)
         elif kind is GoalKind.LAND:
             self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad)
-            h = -z
+            # FlightTaskAuto's _dist_to_ground: the range finder's distance (SIH has one) when
+            # the vehicle sets it, else the estimated altitude above home
+            h = self.dist_bottom if self.dist_bottom == self.dist_bottom else -z
             if h > lim.land_alt1:
                 v = lim.z_down
             elif h > lim.land_alt2:

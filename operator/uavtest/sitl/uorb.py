@@ -533,11 +533,14 @@ def local_position(
     ref: tuple[float, float, float],
     ref_t_us: int,
     valid: bool,
+    dist_bottom: float | None = None,
 ) -> VehicleLocalPosition:
+    """``dist_bottom``: the range finder's distance to the ground (default: the altitude)."""
     x, y, z = pos
     vx, vy, vz = vel
+    bottom = max(-z, 0.0) if dist_bottom is None else max(dist_bottom, 0.0)
     return VehicleLocalPosition(
-        t_us, t_us, x, y, z, vx, vy, vz, vz, acc[0], acc[1], acc[2], heading, 0.0, max(-z, 0.0),
+        t_us, t_us, x, y, z, vx, vy, vz, vz, acc[0], acc[1], acc[2], heading, 0.0, bottom,
         0.3, 0.4, 0.1, 0.1, ref[0], ref[1], ref[2], ref_t_us, NAN, NAN, NAN, NAN,
         valid, valid, valid, valid, valid, valid, True, valid, False,
     )  # fmt: skip

@@ -149,7 +149,7 @@ class Vehicle:
         )
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
-        self.est = Estimator(random.Random(f"{seed}:estimator"))
+        self.est = Estimator(random.Random(f"{seed}:estimator"), random.Random(f"{seed}:estimator-z"))
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed, config.range_sensor)
@@ -473,6 +473,7 @@ class Vehicle:
         if sim.range_sensor is not None or cp is not None:
             self._range_and_cp_inputs(t, cp)  # type: ignore[arg-type]
         if commander.armed and not commander.crashed:
+            self.ctrl.dist_bottom = -b.z  # SIH's downward range finder sees the true height
             self._cmd = self.ctrl.update(
                 dt, goal, st.x, st.y, st.z, b.vx + e.evx, b.vy + e.evy, b.vz + e.evz, st.yaw
             )
@@ -737,6 +738,7 @@ class Vehicle:
                 (self.config.home.lat, self.config.home.lon, self.home_alt),
                 0,
                 True,
+                -b.z,  # SIH's downward range finder: the true height
             )
         )
         if tick % (CONTROL_EVERY * 2) == 0:  # 25 Hz

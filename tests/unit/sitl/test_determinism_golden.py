@@ -199,27 +199,28 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: (FlightTaskAuto's MPC_YAW_MODE 0) (2026-11-25); and for the landing descent tracking its
 #: integrated z trajectory (PositionSmoothing) and the land detector's hysteresis steps of
 #: LNDMC_TRIG_TIME / 3 after touchdown; and for PositionSmoothing's turn: the speed held while
-#: the trajectory is not aligned with its target, aiming at the L1 point (2026-11-25, later).
+#: the trajectory is not aligned with its target, aiming at the L1 point; and for EKF2's vertical
+#: velocity bias (0.12 m/s) and the range finder's true height in dist_bottom (2026-11-25, later).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "3e1dbab13beedb06f803f1265da10b23fdfb4fa7888d5b8361e79e507fe6e20b",
-        "b379bfcb3cc5b980951466b9c2383ac6c97055550c339276cc28f558b69016d3",
+        "4e2bdab858ead211be593216bdc0c5a81c1d01082ad08460d6b70e38bb48ba6a",
+        "d8a45adb196212ccc39aa6a5df79009f6a2994cbcff0f402f3a6e4de3b67ab66",
     ),
     "manual_and_rtl": (
-        "57859f10668c1611772efa75e5c74005197320021818852f960603f9ec42a270",
-        "5852ce2569b3f93172814c23fc471576b56aba052df5391298a2714724f34fc0",
+        "06a7bbfb291bd441b07f3b3eede8393f234b900085958aab1ff824d4a1a02824",
+        "fdf24254f79dfff9ba0df42b37e87c5c0453f5b0bc10fdc7319c15f91806a32f",
     ),
     "datalink_loss": (
-        "9cefa23b0f0f387b753f5bf1d0d14e78c4d13f0be3be4056c89738b5fb8f7564",
-        "46deb813e9b012f2c16f4f179e1793e65a16f93131c404b048ba045518993e7b",
+        "84c37fe5e5301d61e535c5a79416a595e8b04cb73835972cf0cba15aab81a94f",
+        "b09688dcb9e8447abcbcf6d9549e7866b958dfe30695ea3749b1dac27b4f195f",
     ),
     "crash": (
-        "d9d84b57e0da4a1051213c3886011acc8720be5fed5981d66e14508bc6c2c5d4",
-        "8db2bfc670684f25e3893bff30dacce4fc4dfa38c3c2a095bb8b7343f5770864",
+        "a3570bab4114d0b3babd2f158818f55b979063e518a1951d4f5145a86576e0a5",
+        "5f11c26eb746b2979a4daecc79d4cf25816cb515890763f75eb796b3a2768195",
     ),
     "params_and_commands": (
-        "c8040d4925995e2e985fa9096e81bd89b416859c4c087bdead308eb48825ff07",
-        "ab560b89372741154a2518d7ceefe94b90a6f961fa14f1aba9a38e33cd6262e2",
+        "48d6e82e80c7b8e3c50c9611de1c12dd704dcb9958f33bd80a62e474fd5e7d77",
+        "fa2c3c35096ccef54679e2e5af98a4da1d0c5ceea4e13a997501a4793c68e57c",
     ),
 }
 

@@ -114,3 +114,20 @@ def test_a_turn_holds_the_speed_it_began_with() -> None:
     assert _turning_reference(1.0) == pytest.approx(1.0, abs=0.35)
     # a turn begun at cruise speed keeps cruise speed
     assert _turning_reference(5.0) > 3.0
+
+
+def test_the_vertical_velocity_bias_is_px4_sized_and_leaves_the_horizontal_errors_alone() -> None:
+    # PX4 SIH: climb rate against the altitude's own 1 s displacement, 0.10-0.14 m/s in flight
+    a = Estimator(random.Random(3), random.Random(4))
+    b = Estimator(random.Random(3), random.Random(5))
+    biases, alts = [], []
+    for _ in range(50 * 300):
+        a.update(0.02)
+        b.update(0.02)
+        biases.append(a.bz)
+        alts.append(a.ez)
+    assert 0.08 < (sum(x * x for x in biases) / len(biases)) ** 0.5 < 0.17
+    assert max(abs(z) for z in alts) < 0.5  # the bias is not integrated into the altitude
+    assert (a.ex, a.ey, a.evx, a.evy) == (b.ex, b.ey, b.evx, b.evy)  # its own random stream
+    assert a.bz != b.bz
+    assert a.evz == pytest.approx(a._cvz + a.bz)

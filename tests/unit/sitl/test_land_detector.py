@@ -90,10 +90,12 @@ def _px4_descents(shared_data: Path) -> list[float]:
 def test_mission_landing_takes_px4_sih_time(shared_data: Path):
     """From 10 m, PX4 v1.15 SIH descends and detects the landing in 14.1-14.6 s: the descent tracks
     the smoothed trajectory's integrated altitude (not its velocity alone, which lags: ~18 s) and the
-    land detector's three hysteresis steps of LNDMC_TRIG_TIME / 3 follow the touchdown."""
+    land detector's three hysteresis steps of LNDMC_TRIG_TIME / 3 follow the touchdown. EKF2's
+    vertical velocity error (0.12 m/s) holds the vehicle a little above or below the profile, so
+    the crawl of the last metre takes a few tenths of a second more or less (PX4 mission1: 14.6-15.5 s)."""
     px4 = _px4_descents(shared_data)
     assert len(px4) == 4
-    low, high = min(px4) - 1.0, max(px4) + 1.0
+    low, high = min(px4) - 1.5, max(px4) + 1.5
     ours = []
     for seed in range(8):
         config, items = competition(shared_data, 2, seed)
