@@ -252,6 +252,7 @@ class Controller:
         self.ramp = 0.0
         self.stretch = 1.0
         self.speed_prev = 0.0  # PositionSmoothing's _max_speed_previous
+        self.az_ref = 0.0  # the landing descent's vertical acceleration (jerk-limited)
 
     # ------------------------------------------------------------------ horizontal reference
 
@@ -373,6 +374,8 @@ class Controller:
         """(ax, ay, az, yawrate) commands for one controller tick."""
         lim = self.lim
         kind = goal.kind
+        if kind is not GoalKind.LAND:
+            self.az_ref = 0.0
         if kind is GoalKind.IDLE:
             self.reset(x, y, z, 0.0, 0.0, 0.0, yaw)
             return 0.0, 0.0, GRAVITY, 0.0
@@ -433,8 +436,13 @@ class Controller:
                 v = lim.land_speed
             else:
                 v = min(lim.land_crawl, lim.land_speed)
-            step = lim.acc_down * dt
-            self.vz += max(-step, min(step, v - self.vz))
+            # PositionSmoothing's z axis (VelocitySmoothing): jerk-limited at MPC_JERK_AUTO up to
+            # MPC_ACC_DOWN_MAX (PX4 SIH: the descent starts and slows to MPC_LAND_CRWL at +-4 m/s^3)
+            dv = v - self.vz
+            want = math.copysign(min(lim.acc_down, math.sqrt(2.0 * lim.jerk * abs(dv))), dv)
+            jstep = lim.jerk * dt
+            self.az_ref += max(-jstep, min(jstep, want - self.az_ref))
+            self.vz += self.az_ref * dt
             # FlightTaskAuto::_prepareLandSetpoints gives PositionSmoothing a velocity target
             # only (z NaN), but the smoothed trajectory integrates its own position and
             # PositionControl tracks both: a vehicle lagging the descent catches up (PX4 SIH's

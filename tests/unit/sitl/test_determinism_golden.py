@@ -200,27 +200,28 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: integrated z trajectory (PositionSmoothing) and the land detector's hysteresis steps of
 #: LNDMC_TRIG_TIME / 3 after touchdown; and for PositionSmoothing's turn: the speed held while
 #: the trajectory is not aligned with its target, aiming at the L1 point; and for EKF2's vertical
-#: velocity bias (0.12 m/s) and the range finder's true height in dist_bottom (2026-11-25, later).
+#: velocity bias (0.12 m/s) and the range finder's true height in dist_bottom; and for the
+#: landing's jerk-limited vertical speed (MPC_JERK_AUTO) (2026-11-25, later).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "4e2bdab858ead211be593216bdc0c5a81c1d01082ad08460d6b70e38bb48ba6a",
-        "d8a45adb196212ccc39aa6a5df79009f6a2994cbcff0f402f3a6e4de3b67ab66",
+        "3235f79fecf6cf05ad6245da14aebfd486e9e35f6130f0a27052fea895144797",
+        "0af52b16f0f7a1966ae81ed927e0de5beed6dfa1a09e04c220365622ca3ab5b9",
     ),
     "manual_and_rtl": (
-        "06a7bbfb291bd441b07f3b3eede8393f234b900085958aab1ff824d4a1a02824",
-        "fdf24254f79dfff9ba0df42b37e87c5c0453f5b0bc10fdc7319c15f91806a32f",
+        "4f3692ae53658ef65bbda693314339d875891f13660e303d303508a405c2f096",
+        "bfc5e834b793a5eb7f5676d173d869e1e9ff2a46d574fb26e54c481f7e603a3a",
     ),
     "datalink_loss": (
-        "84c37fe5e5301d61e535c5a79416a595e8b04cb73835972cf0cba15aab81a94f",
-        "b09688dcb9e8447abcbcf6d9549e7866b958dfe30695ea3749b1dac27b4f195f",
+        "c29cca83e2d56929099c8b5fe5831d9862eb2edbb9695b415b291cd59e3ea0f3",
+        "96658149bd09d8f61f178acb5a6547bf6b2c411594713b33ee9c0a415b0196a6",
     ),
     "crash": (
         "a3570bab4114d0b3babd2f158818f55b979063e518a1951d4f5145a86576e0a5",
         "5f11c26eb746b2979a4daecc79d4cf25816cb515890763f75eb796b3a2768195",
     ),
     "params_and_commands": (
-        "48d6e82e80c7b8e3c50c9611de1c12dd704dcb9958f33bd80a62e474fd5e7d77",
-        "fa2c3c35096ccef54679e2e5af98a4da1d0c5ceea4e13a997501a4793c68e57c",
+        "9deb67aa14ab61a9604eff7b283698829ca35536b25be2dd2faddb2961f1ea1f",
+        "8efd07d2815ccc6d175c66989c7bd8cf7fdb12ac0221e71d54189112b46cdbc8",
     ),
 }
 

@@ -131,3 +131,30 @@ def test_the_vertical_velocity_bias_is_px4_sized_and_leaves_the_horizontal_error
     assert (a.ex, a.ey, a.evx, a.evy) == (b.ex, b.ey, b.evx, b.evy)  # its own random stream
     assert a.bz != b.bz
     assert a.evz == pytest.approx(a._cvz + a.bz)
+
+
+def _descent(z0: float, seconds: float) -> list[float]:
+    """The landing's vertical speed reference every 0.1 s, the vehicle following it exactly."""
+    c = Controller(Limits.of(ParamStore()))
+    c.reset(0.0, 0.0, z0, 0.0, 0.0, 0.0, 0.0)
+    c.dist_bottom = -z0
+    goal = Goal(GoalKind.LAND, x=0.0, y=0.0, z=0.0)
+    out = []
+    for k in range(int(seconds / 0.02)):
+        c.dist_bottom = -c.pz
+        c.update(0.02, goal, 0.0, 0.0, c.pz, 0.0, 0.0, c.vz, 0.0)
+        if k % 5 == 4:
+            out.append(c.vz)
+    return out
+
+
+def test_the_landing_descent_starts_and_slows_at_px4s_jerk() -> None:
+    # PX4 SIH mission2 run2's trajectory_setpoint: 0.06 -> 0.26 -> 0.66 -> 1.07 -> 1.37 -> 1.48 m/s
+    # at 5 Hz, jerk +-4 m/s^3 (MPC_JERK_AUTO); from 0.70 to MPC_LAND_CRWL 0.30 in about 0.5 s
+    start = _descent(-10.0, 1.5)
+    assert start[2] < 0.25  # 0.3 s in: 0.5 * 4 * 0.3^2 = 0.18, where 3 m/s^2 at once gives 0.9
+    assert 1.3 < max(start) < 1.5  # MPC_Z_VEL_MAX_DN 1.5 interpolated towards MPC_LAND_SPEED
+    crawl = _descent(-1.3, 2.0)
+    slowing = [v for v in crawl if 0.32 < v < 0.68]
+    assert 2 <= len(slowing) <= 8  # 0.2-0.8 s from the land speed down to the crawl
+    assert crawl[-1] == pytest.approx(0.3, abs=0.02)
