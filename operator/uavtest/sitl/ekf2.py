@@ -45,10 +45,8 @@ import random
 
 __all__ = ["Estimator"]
 
-TAU = 4.0  # s: horizontal position error leak (GPS corrections)
-TAU_Z = 4.0  # s: altitude error leak (GPS height corrections)
+TAU = 4.0  # s: position error leak (GPS corrections)
 TAU_V = 1.0  # s: velocity error correlation time
-TAU_VZ = 1.0  # s: vertical velocity error (integrated into the altitude) correlation time
 SIGMA_XY = 0.12  # m: standard deviation of the horizontal position error
 SIGMA_Z = 0.08  # m: of the altitude error
 SIGMA_BIAS_Z = 0.12  # m/s: vertical velocity bias, not integrated into the altitude
@@ -59,7 +57,6 @@ SIGMA_BIAS = 0.22  # m/s: per axis
 #: stationary standard deviation of x for x' = -x / TAU + v, v Gauss-Markov(sigma_v, TAU_V):
 #: sigma_x^2 = sigma_v^2 * TAU_V * TAU^2 / (TAU_V + TAU)
 _GAIN = math.sqrt(TAU_V * TAU * TAU / (TAU_V + TAU))
-_GAIN_Z = math.sqrt(TAU_VZ * TAU_Z * TAU_Z / (TAU_VZ + TAU_Z))
 
 
 class Estimator:
@@ -95,7 +92,7 @@ class Estimator:
         #: what they were before the vertical channel was calibrated
         self._rng_z = rng_z or random.Random(0)
         g = rng.gauss
-        self._sv = (SIGMA_XY / _GAIN, SIGMA_XY / _GAIN, SIGMA_Z / _GAIN_Z)
+        self._sv = (SIGMA_XY / _GAIN, SIGMA_XY / _GAIN, SIGMA_Z / _GAIN)
         sx, sy, sz = self._sv
         self._cvx, self._cvy, self._cvz = g(0, sx), g(0, sy), g(0, sz)
         self.ex, self.ey, self.ez = g(0, SIGMA_XY), g(0, SIGMA_XY), g(0, SIGMA_Z)
@@ -114,18 +111,17 @@ class Estimator:
         sx, sy, sz = self._sv
         self._cvx = av * self._cvx + bv * sx * g(0.0, 1.0)
         self._cvy = av * self._cvy + bv * sy * g(0.0, 1.0)
-        az = math.exp(-dt / TAU_VZ)
-        self._cvz = az * self._cvz + math.sqrt(1 - az * az) * sz * g(0.0, 1.0)
+        self._cvz = av * self._cvz + bv * sz * g(0.0, 1.0)
         self.ex = leak * self.ex + self._cvx * dt
         self.ey = leak * self.ey + self._cvy * dt
-        self.ez = (1.0 - dt / TAU_Z) * self.ez + self._cvz * dt
+        self.ez = leak * self.ez + self._cvz * dt
         ab = math.exp(-dt / TAU_BIAS)
         bb = math.sqrt(1 - ab * ab) * SIGMA_BIAS
         self.bx = ab * self.bx + bb * g(0.0, 1.0)
         self.by = ab * self.by + bb * g(0.0, 1.0)
         self.evx = self._cvx + self.bx
         self.evy = self._cvy + self.by
-        self.bz = ab * self.bz + math.sqrt(1 - ab * ab) * SIGMA_BIAS_Z * self._rng_z.gauss(0.0, 1.0)
+        self.bz = ab * self.bz + bb * (SIGMA_BIAS_Z / SIGMA_BIAS) * self._rng_z.gauss(0.0, 1.0)
         self.evz = self._cvz + self.bz
         ah = math.exp(-dt / TAU_HEADING)
         self.eh = ah * self.eh + math.sqrt(1 - ah * ah) * SIGMA_HEADING * g(0.0, 1.0)

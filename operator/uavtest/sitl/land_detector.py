@@ -7,8 +7,8 @@ commanded descent (``descent_commanded``).
 
 Timing after touchdown, as PX4 v1.15 with a range finder (SIH has one, so dist_bottom is valid
 and ``_set_hysteresis_factor(1)``): the ground-contact conditions (low thrust, no vertical
-movement) hold once the thrust has fallen, ``contact_delay`` seconds after touchdown (PX4 SIH:
-0.35-0.75 s, the per-vehicle ``jitter``); ``ground_contact``, ``maybe_landed`` and ``landed``
+movement) hold once the thrust has fallen, ``jitter`` seconds after touchdown (per vehicle;
+PX4 SIH: 0.35-0.75 s); ``ground_contact``, ``maybe_landed`` and ``landed``
 then each follow after ``LNDMC_TRIG_TIME`` / 3 (their hysteresis). PX4 SIH logs: touchdown to
 landed 1.36-1.76 s (8 of 9 flights), ground_contact to landed 0.69 s, maybe_landed to landed
 0.34 s.

@@ -233,10 +233,10 @@ class Controller:
         self.velocity_constraint: (
             Callable[[float, float, float, float, float], tuple[float, float]] | None
         ) = None
+        #: distance to the ground from the range finder (m), NaN without one; set by the vehicle
+        self.dist_bottom = math.nan
         #: MPC_POS_MODE 0 (FlightTaskManualPosition): the stick velocity straight to the velocity
         #: loop, the position locked once slower than ``hold_max_xy`` (MPC_HOLD_MAX_XY); set by the vehicle
-        #: distance to the ground from the range finder (m), NaN without one
-        self.dist_bottom = math.nan
         self.direct_velocity = False
         self.hold_max_xy = 0.8
         self.xy_locked = False

@@ -104,3 +104,24 @@ def test_mission_landing_takes_px4_sih_time(shared_data: Path):
         assert flight.landed_s is not None
         ours.append(flight.landed_s - started)
     assert all(low <= d <= high for d in ours), f"PX4 {px4}, built-in {ours}"
+
+
+def test_no_landing_is_detected_in_the_air_and_it_follows_touchdown_by_px4s_hysteresis():
+    v = ready_vehicle(seed=3)
+    command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
+    command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, float("nan"), float("nan"), float("nan"), 488.0 + 3)
+    v.fly_until(lambda v: -v.body.z > 2.5, 30_000_000)
+    command(v, MavCmd.NAV_LAND)
+    seen_landed_in_air = []
+
+    def touched(v) -> bool:
+        if v.landed:
+            seen_landed_in_air.append(v.time_us)
+        return v.body.on_ground
+
+    v.fly_until(touched, 60_000_000)
+    assert v.body.on_ground and not seen_landed_in_air and not v.landed
+    touchdown = v.time_us
+    v.fly_until(lambda v: v.landed, 10_000_000)
+    # three steps of LNDMC_TRIG_TIME / 3 after the thrust has fallen (0.35-0.75 s after touchdown)
+    assert 1.3 <= (v.landed_at_us - touchdown) / 1e6 <= 1.8
