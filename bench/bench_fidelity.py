@@ -13,6 +13,11 @@ README (MIS_TAKEOFF_ALT 5, MPC_XY_CRUISE 8; takeoff to 10 m, 30 m north, 30 m ea
 one PX4 log, so no PX4-vs-PX4 range.
 
     python bench/bench_fidelity.py [--seeds 25] [--plans mission1,mission2,square]
+        [--px4-logs mission2=DIR ...]
+
+``--px4-logs PLAN=DIR`` adds every ``*.ulg`` under DIR (e.g. the replica folders of ``uavtest run``
+with ``simulator: px4`` on the same plan) to that plan's PX4 flights: PX4 SIH seeds its sensor
+noise with ``srand(1234)`` on every start, so the shared logs are few noise realizations.
 """
 
 from __future__ import annotations
@@ -24,7 +29,7 @@ import os
 import statistics
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -130,10 +135,24 @@ def _measure(ulog: ULog, into: Flights) -> None:
         into.vertical_series.append(vertical)
 
 
-def px4_flights(names: list[str]) -> Flights:
+def px4_flights(names: list[str], extra: Sequence[Path] = ()) -> Flights:
     out = Flights([], [])
-    for name in names:
-        _measure(read_ulog(PX4_SIH / name), out)
+    for path in [PX4_SIH / name for name in names] + list(extra):
+        _measure(read_ulog(path), out)
+    return out
+
+
+def _extra_logs(specs: list[str]) -> dict[str, list[Path]]:
+    """``PLAN=DIR`` arguments: every ``*.ulg`` under each DIR, per plan."""
+    out: dict[str, list[Path]] = {}
+    for spec in specs:
+        name, sep, folder = spec.partition("=")
+        if not sep or name not in PLANS:
+            raise SystemExit(f"--px4-logs {spec!r}: expected PLAN=DIR with PLAN one of {', '.join(PLANS)}")
+        logs = sorted(Path(folder).rglob("*.ulg"))
+        if not logs:
+            raise SystemExit(f"--px4-logs {spec!r}: no *.ulg under {folder}")
+        out.setdefault(name, []).extend(logs)
     return out
 
 
@@ -219,7 +238,15 @@ def main() -> None:
     )
     parser.add_argument("--seeds", type=int, default=25)
     parser.add_argument("--plans", default="mission1,mission2,square")
+    parser.add_argument(
+        "--px4-logs",
+        action="append",
+        default=[],
+        metavar="PLAN=DIR",
+        help="more PX4 flights of PLAN: every *.ulg under DIR (repeatable)",
+    )
     args = parser.parse_args()
+    extra = _extra_logs(args.px4_logs)
     if not PX4_SIH.is_dir():
         raise SystemExit(f"{PX4_SIH} not found (set UAVTEST_SHARED_DATA to the real data folder)")
     console = Console(width=150)
@@ -230,7 +257,9 @@ def main() -> None:
         plan, logs = PLANS[name]
         if plan is None:
             plan = competition(int(name[-1]))
-        px4 = px4_flights(logs)
+        px4 = px4_flights(logs, extra.get(name, []))
+        if name in extra:
+            console.print(f"{name}: {len(logs)} shared PX4 logs and {len(extra[name])} from --px4-logs")
         ours, wall = builtin_flights(plan, args.seeds)
         t, ok = table(name, px4, ours)
         all_ok &= ok or len(px4.figures) < 2
