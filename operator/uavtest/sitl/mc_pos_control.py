@@ -100,6 +100,8 @@ class Limits:
     z_p: float
     vxy_p: float
     vxy_i: float
+    vxy_d: float
+    veld_lp: float
     vz_p: float
     vz_i: float
     acc_up: float
@@ -137,6 +139,8 @@ class Limits:
             z_p=p["MPC_Z_P"],
             vxy_p=p["MPC_XY_VEL_P_ACC"],
             vxy_i=p["MPC_XY_VEL_I_ACC"],
+            vxy_d=p["MPC_XY_VEL_D_ACC"],
+            veld_lp=p["MPC_VELD_LP"],
             vz_p=p["MPC_Z_VEL_P_ACC"],
             vz_i=p["MPC_Z_VEL_I_ACC"],
             acc_up=p["MPC_ACC_UP_MAX"],
@@ -247,6 +251,9 @@ class Controller:
         self.vx, self.vy, self.vz = vx, vy, vz
         self.ax = self.ay = 0.0
         self.ix = self.iy = self.iz = 0.0
+        # MulticopterPositionControl's _vel_x/y_deriv (BlockDerivative, MPC_VELD_LP low-pass)
+        self.dvx = self.dvy = 0.0
+        self.vx_prev, self.vy_prev = vx, vy
         self.yaw_sp = yaw
         self.yawrate_sp = 0.0
         self.ramp = 0.0
@@ -316,6 +323,15 @@ class Controller:
 
     # ------------------------------------------------------------------ loops
 
+    def _velocity_derivative(self, dt: float, vx: float, vy: float) -> None:
+        """The estimated velocity's derivative low-passed at MPC_VELD_LP: PositionControl's
+        ``_vel_dot`` (BlockDerivative into BlockLowPass)."""
+        b = 2.0 * math.pi * self.lim.veld_lp * dt
+        a = b / (1.0 + b)
+        self.dvx += a * ((vx - self.vx_prev) / dt - self.dvx)
+        self.dvy += a * ((vy - self.vy_prev) / dt - self.dvy)
+        self.vx_prev, self.vy_prev = vx, vy
+
     def _xy_loops(self, dt: float, x: float, y: float, vx: float, vy: float) -> tuple[float, float]:
         lim = self.lim
         # the trajectory's velocity is fed forward unstretched (PositionSmoothing's output)
@@ -326,7 +342,12 @@ class Controller:
         imax = GRAVITY * math.tan(lim.tilt_max)
         self.ix = max(-imax, min(imax, self.ix + lim.vxy_i * evx * dt))
         self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * evy * dt))
-        return lim.vxy_p * evx + self.ix + self.ax, lim.vxy_p * evy + self.iy + self.ay
+        # PositionControl::_velocityControl: P + I - D on the velocity's derivative, plus the
+        # trajectory's acceleration fed forward
+        return (
+            lim.vxy_p * evx + self.ix - lim.vxy_d * self.dvx + self.ax,
+            lim.vxy_p * evy + self.iy - lim.vxy_d * self.dvy + self.ay,
+        )
 
     def _z_loops(self, dt: float, z: float, vz: float, position: bool) -> float:
         lim = self.lim
@@ -379,6 +400,7 @@ class Controller:
         if kind is GoalKind.IDLE:
             self.reset(x, y, z, 0.0, 0.0, 0.0, yaw)
             return 0.0, 0.0, GRAVITY, 0.0
+        self._velocity_derivative(dt, vx, vy)
         if kind is GoalKind.POSITION:
             speed = goal.speed if goal.speed == goal.speed else lim.cruise
             speed = min(speed, lim.vel_max)
@@ -496,7 +518,11 @@ class Controller:
         imax = GRAVITY * math.tan(lim.tilt_max)
         self.ix = max(-imax, min(imax, self.ix + lim.vxy_i * evx * dt))
         self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * evy * dt))
-        ax, ay = self._limit_tilt(lim.vxy_p * evx + self.ix, lim.vxy_p * evy + self.iy, lim.tilt_max)
+        ax, ay = self._limit_tilt(
+            lim.vxy_p * evx + self.ix - lim.vxy_d * self.dvx,
+            lim.vxy_p * evy + self.iy - lim.vxy_d * self.dvy,
+            lim.tilt_max,
+        )
         az = self._z_loops(dt, z, vz, False)
         if goal.yawspeed == goal.yawspeed and goal.yaw != goal.yaw:
             self.yaw_sp = yaw

@@ -201,27 +201,28 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: LNDMC_TRIG_TIME / 3 after touchdown; and for PositionSmoothing's turn: the speed held while
 #: the trajectory is not aligned with its target, aiming at the L1 point; and for EKF2's vertical
 #: velocity bias (0.12 m/s) and the range finder's true height in dist_bottom; and for the
-#: landing's jerk-limited vertical speed (MPC_JERK_AUTO) (2026-11-25, later).
+#: landing's jerk-limited vertical speed (MPC_JERK_AUTO) (2026-11-25, later); and for the velocity
+#: loop's derivative term (MPC_XY_VEL_D_ACC on the velocity's MPC_VELD_LP-filtered derivative).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "3235f79fecf6cf05ad6245da14aebfd486e9e35f6130f0a27052fea895144797",
-        "0af52b16f0f7a1966ae81ed927e0de5beed6dfa1a09e04c220365622ca3ab5b9",
+        "e66cd6d9ad6df5e8e0848b342ba93a17474f62499d5edd5ebff6f72fa8a0b612",
+        "bcfacad8ec2fe5807938b01809a63a3e15f8b2f27bb07308f6d6dcae9f86506f",
     ),
     "manual_and_rtl": (
-        "4f3692ae53658ef65bbda693314339d875891f13660e303d303508a405c2f096",
-        "bfc5e834b793a5eb7f5676d173d869e1e9ff2a46d574fb26e54c481f7e603a3a",
+        "39636853a2a357b3e143b591efb645638bed4872901bf0b37dc761de1c490a4a",
+        "5fbf4aa6e3dbd81ad35a896647d75d72a6cfe13c4fb39b5fd20829cb9d1a71a3",
     ),
     "datalink_loss": (
-        "c29cca83e2d56929099c8b5fe5831d9862eb2edbb9695b415b291cd59e3ea0f3",
-        "96658149bd09d8f61f178acb5a6547bf6b2c411594713b33ee9c0a415b0196a6",
+        "f5dccaa4d73b466599ecf7f4f2e342565f95309a66eb9795050065efdf95dbed",
+        "9a7e2c3f8700454c4e0542caf69425c70dbc1bbc75d01a8a32477fe0ea8d0aaa",
     ),
     "crash": (
-        "a3570bab4114d0b3babd2f158818f55b979063e518a1951d4f5145a86576e0a5",
-        "5f11c26eb746b2979a4daecc79d4cf25816cb515890763f75eb796b3a2768195",
+        "2f45767fdd52b56a7eb93287d9bd815c828f0546269872ff5ae5496b9e1ac77c",
+        "2e4d370737ebb63ff62dd28d95272b65a022df1c6d32b423d8d1b3e80130871b",
     ),
     "params_and_commands": (
-        "9deb67aa14ab61a9604eff7b283698829ca35536b25be2dd2faddb2961f1ea1f",
-        "8efd07d2815ccc6d175c66989c7bd8cf7fdb12ac0221e71d54189112b46cdbc8",
+        "e4fd0f030e167b346a180f697aae30c43117c5493e79dc0cbd0fe3ad2d96cc96",
+        "ac4d6702cec2906afb4745e530757c1cad48309b47053d843c8d062718b70541",
     ),
 }
 

@@ -158,3 +158,26 @@ def test_the_landing_descent_starts_and_slows_at_px4s_jerk() -> None:
     slowing = [v for v in crawl if 0.32 < v < 0.68]
     assert 2 <= len(slowing) <= 8  # 0.2-0.8 s from the land speed down to the crawl
     assert crawl[-1] == pytest.approx(0.3, abs=0.02)
+
+
+def _accelerating_command(d_gain: float) -> float:
+    """The velocity loop's command along y after 1 s of the estimated velocity rising at 3 m/s^2
+    one step behind a trajectory that does the same (50 Hz ticks)."""
+    params = ParamStore()
+    params.set("MPC_XY_VEL_D_ACC", d_gain)
+    c = Controller(Limits.of(params))
+    c.reset(0.0, 0.0, -10.0, 0.0, 0.0, 0.0, 0.0)
+    dt, ay = 0.02, 0.0
+    for i in range(1, 51):
+        v = 3.0 * i * dt
+        c.py, c.vy, c.ay = 0.5 * 3.0 * (i * dt) ** 2, v, 3.0
+        c._velocity_derivative(dt, 0.0, v - 3.0 * dt)
+        ay = c._xy_loops(dt, 0.0, c.py, 0.0, v - 3.0 * dt)[1]
+    return ay
+
+
+def test_the_velocity_loop_damps_the_measured_acceleration_by_mpc_xy_vel_d_acc() -> None:
+    # PositionControl::_velocityControl: acc = P * vel_error + I - D * vel_dot + feed-forward,
+    # vel_dot the estimated velocity's derivative low-passed at MPC_VELD_LP (5 Hz): settled in 1 s
+    assert _accelerating_command(0.0) - _accelerating_command(0.2) == pytest.approx(0.2 * 3.0, rel=0.02)
+    assert _accelerating_command(0.0) - _accelerating_command(1.0) == pytest.approx(1.0 * 3.0, rel=0.02)
