@@ -25,6 +25,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from enum import Enum
 
+from uavtest.sitl import velocity_smoothing
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.simulator_sih import GRAVITY
 
@@ -54,6 +55,7 @@ class GoalKind(Enum):
 
 
 NO_TRACK = (math.nan, math.nan)
+NO_NEXT = (math.nan, math.nan, math.nan)
 
 
 @dataclass(slots=True)
@@ -71,6 +73,9 @@ class Goal:
     #: track to x, y; NO_TRACK: none (fly straight to x, y)
     prev: tuple[float, float] = NO_TRACK
     acc_rad: float = math.nan  # POSITION: the target's acceptance radius (nan: NAV_ACC_RAD)
+    #: POSITION: position_setpoint_triplet.next (x, y, z), the waypoint after the target that the
+    #: trajectory turns towards without stopping; NaN: none (stop at the target)
+    next: tuple[float, float, float] = NO_NEXT
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,6 +117,8 @@ class Limits:
     hold_dz: float
     yaw_mode: int
     acc_rad: float
+    alt_rad: float
+    traj_p: float
 
     @classmethod
     def of(cls, p: ParamStore) -> Limits:
@@ -151,6 +158,8 @@ class Limits:
             hold_dz=p["MPC_HOLD_DZ"],
             yaw_mode=int(p["MPC_YAW_MODE"]),
             acc_rad=p["NAV_ACC_RAD"],
+            alt_rad=p["NAV_MC_ALT_RAD"],
+            traj_p=p["MPC_XY_TRAJ_P"],
         )
 
 
@@ -208,19 +217,36 @@ def l1_point(
     return cx + ahead * ux, cy + ahead * uy
 
 
-def turn_speed(
-    x: float, y: float, tx: float, ty: float, nx: float, ny: float, acc: float, acc_rad: float
+def corner_speed(
+    start: tuple[float, float, float],
+    target: tuple[float, float, float],
+    nxt: tuple[float, float, float],
+    lim: Limits,
+    acc_rad: float,
+    cruise: float,
 ) -> float:
-    """The speed PX4 allows through an internal waypoint (tx, ty) on the way to (nx, ny):
-    ``computeStartXYSpeedFromWaypoints``' turn speed, sqrt(0.8 MPC_ACC_HOR r tan(alpha / 2))."""
-    ax, ay = tx - x, ty - y
-    bx, by = tx - nx, ty - ny
-    na, nb = math.hypot(ax, ay), math.hypot(bx, by)
-    if na < 1e-6 or nb < acc_rad:
+    """The speed PX4 passes ``target`` at on its way from ``start`` (the trajectory's position)
+    to ``nxt``: ``computeStartXYSpeedFromWaypoints``' ``speed_at_target`` (PX4 v1.15
+    TrajectoryConstraints.hpp). A tangent circle through the corner at MPC_XY_TRAJ_P x MPC_ACC_HOR
+    centripetal acceleration and the acceptance radius, sqrt(a r tan(alpha / 2)), no faster than the
+    speed from which the next leg can still be stopped in (and than ``cruise``); zero (a stop) when
+    the next point is within the acceptance radius of the target, when the target is not reached in
+    altitude yet or the next one is at another altitude (NAV_MC_ALT_RAD), or when there is none
+    (NaN)."""
+    tx, ty, tz = target
+    nx, ny, nz = nxt
+    d_next = math.hypot(tx - nx, ty - ny)
+    if not (d_next > 0.001 and d_next >= acc_rad):
         return 0.0
-    cos_alpha = max(-1.0, min(1.0, (ax * bx + ay * by) / (na * nb)))
-    alpha = min(math.acos(cos_alpha), math.pi - 1e-6)
-    return math.sqrt(0.8 * acc * acc_rad * math.tan(alpha / 2.0))
+    if not (abs(tz - start[2]) < lim.alt_rad and abs(nz - tz) < lim.alt_rad):
+        return 0.0
+    ax, ay = tx - start[0], ty - start[1]
+    na = math.hypot(ax, ay)
+    cos_alpha = (ax * (tx - nx) + ay * (ty - ny)) / (na * d_next) if na > 1e-6 else 0.0
+    alpha = min(math.acos(max(-1.0, min(1.0, cos_alpha))), math.pi - 1e-6)
+    in_turn = math.sqrt(lim.traj_p * lim.acc_hor * acc_rad * math.tan(alpha / 2.0))
+    exit_speed = min(cruise, max_speed_from_distance(lim.jerk, lim.acc_hor, d_next, 0.0))
+    return min(in_turn, exit_speed, cruise)
 
 
 class Controller:
@@ -303,11 +329,20 @@ class Controller:
             vdx, vdy = ex / dist * vmax, ey / dist * vmax
         else:
             vdx = vdy = 0.0
-        self._accelerate(dts, vdx, vdy)
-        self.px += self.vx * dts
-        self.py += self.vy * dts
+        self._smooth(dts, vdx, vdy)
         if dist < 0.02 and self.vx * self.vx + self.vy * self.vy < 0.01:
             self.px, self.py, self.vx, self.vy, self.ax, self.ay = tx, ty, 0.0, 0.0, 0.0, 0.0
+
+    def _smooth(self, dts: float, vdx: float, vdy: float) -> None:
+        """PositionSmoothing's x and y trajectories (VelocitySmoothing): a time-optimal
+        jerk-limited profile per axis towards the velocity setpoint (MPC_JERK_AUTO, MPC_ACC_HOR
+        per axis, MPC_XY_VEL_MAX), the two synchronized to end together, advanced ``dts``."""
+        lim = self.lim
+        fx = velocity_smoothing.plan(self.ax, self.vx, self.px, vdx, lim.jerk, lim.acc_hor, lim.vel_max)
+        fy = velocity_smoothing.plan(self.ay, self.vy, self.py, vdy, lim.jerk, lim.acc_hor, lim.vel_max)
+        velocity_smoothing.synchronize(fx, fy, vdx, vdy, lim.acc_hor, lim.vel_max)
+        self.ax, self.vx, self.px = velocity_smoothing.advance(fx, dts)
+        self.ay, self.vy, self.py = velocity_smoothing.advance(fy, dts)
 
     def _accelerate(self, dts: float, vdx: float, vdy: float) -> None:
         lim = self.lim
@@ -406,14 +441,14 @@ class Controller:
             speed = min(speed, lim.vel_max)
             acc_rad = goal.acc_rad if goal.acc_rad == goal.acc_rad else lim.acc_rad
             tx, ty, via = track_target(goal, x, y, acc_rad)
-            if via:  # an internal waypoint before the target: PX4's speed through it
-                speed = min(speed, turn_speed(x, y, tx, ty, goal.x, goal.y, lim.acc_hor, acc_rad))
+            # PositionSmoothing's waypoints {trajectory, target, next}: an internal waypoint before
+            # the target is passed towards the target; the target towards the triplet's next
+            nxt = (goal.x, goal.y, goal.z) if via else goal.next
+            final = corner_speed((self.px, self.py, self.pz), (tx, ty, goal.z), nxt, lim, acc_rad, speed)
             # the line the trajectory follows: from the previous waypoint, or from where the
             # vehicle is when it heads for an internal waypoint first (FlightTaskAuto's _prev_wp)
             line = (x, y) if via else (goal.prev if goal.prev[0] == goal.prev[0] else None)
-            self._xy_reference(
-                dt, tx, ty, speed, x, y, final=0.0 if not via else speed, acc_rad=acc_rad, line=line
-            )
+            self._xy_reference(dt, tx, ty, speed, x, y, final=final, acc_rad=acc_rad, line=line)
             self._z_reference(dt, goal.z)
             target_yaw = goal.yaw
             if math.isnan(target_yaw) and lim.yaw_mode == 0:

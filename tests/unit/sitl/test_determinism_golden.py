@@ -202,27 +202,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: the trajectory is not aligned with its target, aiming at the L1 point; and for EKF2's vertical
 #: velocity bias (0.12 m/s) and the range finder's true height in dist_bottom; and for the
 #: landing's jerk-limited vertical speed (MPC_JERK_AUTO) (2026-11-25, later); and for the velocity
-#: loop's derivative term (MPC_XY_VEL_D_ACC on the velocity's MPC_VELD_LP-filtered derivative).
+#: loop's derivative term (MPC_XY_VEL_D_ACC on the velocity's MPC_VELD_LP-filtered derivative);
+#: and for PositionSmoothing's per-axis VelocitySmoothing (time-optimal, jerk-limited, x and y
+#: synchronized) and mission corners turned at computeMaxSpeedInWaypoint's speed (MPC_XY_TRAJ_P).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "e66cd6d9ad6df5e8e0848b342ba93a17474f62499d5edd5ebff6f72fa8a0b612",
-        "bcfacad8ec2fe5807938b01809a63a3e15f8b2f27bb07308f6d6dcae9f86506f",
+        "b0cb495fc0e6c2b08754c291238331f7ba4a67c1abd4b1971ee9fe8cc59e3969",
+        "371a6b7ceb2aceddb2190304ba6902f00a74a0f14798426f5ce2fa68acbd0840",
     ),
     "manual_and_rtl": (
-        "39636853a2a357b3e143b591efb645638bed4872901bf0b37dc761de1c490a4a",
-        "5fbf4aa6e3dbd81ad35a896647d75d72a6cfe13c4fb39b5fd20829cb9d1a71a3",
+        "c1b3e60510213bf28ece046b1d49881970d37ba513090c5df7a527af47f16920",
+        "b96b081721cc90705b30f2f2086f2b82dd7ef7196eeec6e7a70ee37fefa3f58d",
     ),
     "datalink_loss": (
-        "f5dccaa4d73b466599ecf7f4f2e342565f95309a66eb9795050065efdf95dbed",
-        "9a7e2c3f8700454c4e0542caf69425c70dbc1bbc75d01a8a32477fe0ea8d0aaa",
+        "960ee94204616f2f21a9d0448a08ceffeaf8a10b0960d755822bd5f150aa04b4",
+        "b4235c0ea998efcdb50aeff29a3b0f3846b4dea4bb96d2d86a60b9092ec088c4",
     ),
     "crash": (
-        "2f45767fdd52b56a7eb93287d9bd815c828f0546269872ff5ae5496b9e1ac77c",
-        "2e4d370737ebb63ff62dd28d95272b65a022df1c6d32b423d8d1b3e80130871b",
+        "1195bde5fec6be4ad986e931132db6090b3bbb1d03a47a7326d7635add7e6cd1",
+        "23c3d51c22093bc5299f498e7ce633055a61fa404d90756641fbb84f4fa72ccf",
     ),
     "params_and_commands": (
-        "e4fd0f030e167b346a180f697aae30c43117c5493e79dc0cbd0fe3ad2d96cc96",
-        "ac4d6702cec2906afb4745e530757c1cad48309b47053d843c8d062718b70541",
+        "54efd71515bd5521961a6119557a1a9cf5ed2c74329fdbd6a31840c15dca64b9",
+        "a8f6fed0cf11daa5aaad7ec0b69a83a3d7e6e2b3b64d75deb468a6f8666692e2",
     ),
 }
 

@@ -14,10 +14,10 @@ from uavtest.sitl.mc_pos_control import (
     Goal,
     GoalKind,
     Limits,
+    corner_speed,
     l1_point,
     max_speed_from_distance,
     track_target,
-    turn_speed,
 )
 from uavtest.sitl.params import ParamStore
 
@@ -46,11 +46,26 @@ def test_previous_waypoint_in_front_and_target_behind() -> None:
     assert track_target(no_track, 3.0, -3.0, 0.5) == (5.0, 5.0, False)
 
 
-def test_turn_speed_through_a_right_angle_and_braking_distance() -> None:
-    # computeMaxSpeedInWaypoint(90 deg, 0.8 * 3 m/s^2, 0.5 m) = sqrt(1.2)
-    assert turn_speed(0.5, 20.0, 0.0, 20.0, 0.0, 50.0, 3.0, 0.5) == pytest.approx(math.sqrt(1.2), rel=1e-3)
-    # straight on: no limit worth the name
-    assert turn_speed(0.0, 10.0, 0.0, 20.0, 0.0, 50.0, 3.0, 0.5) > 100.0
+def test_corner_speed_through_a_right_angle_and_braking_distance() -> None:
+    lim = Limits.of(ParamStore())
+    # computeMaxSpeedInWaypoint(90 deg, MPC_XY_TRAJ_P 0.5 * MPC_ACC_HOR 3 m/s^2, 0.5 m) = sqrt(0.75)
+    right = corner_speed((0.5, 20.0, -10.0), (0.0, 20.0, -10.0), (0.0, 50.0, -10.0), lim, 0.5, 5.0)
+    assert right == pytest.approx(math.sqrt(0.75), rel=1e-3)
+    # the square's corner with NAV_ACC_RAD 2: sqrt(0.5 * 3 * 2) = 1.73 m/s (PX4 SIH's
+    # trajectory_setpoint passes it at 1.34-1.73 m/s)
+    square = corner_speed((0.0, 0.0, -10.0), (30.0, 0.0, -10.0), (30.0, 30.0, -10.0), lim, 2.0, 8.0)
+    assert square == pytest.approx(math.sqrt(3.0), rel=1e-3)
+    # straight on: the cruise speed, or the speed the next leg can still stop from
+    assert corner_speed((0.0, 10.0, -10.0), (0.0, 20.0, -10.0), (0.0, 50.0, -10.0), lim, 0.5, 5.0) == 5.0
+    short = corner_speed((0.0, 10.0, -10.0), (0.0, 20.0, -10.0), (0.0, 21.0, -10.0), lim, 0.5, 5.0)
+    assert short == pytest.approx(max_speed_from_distance(4.0, 3.0, 1.0, 0.0))
+    # a stop: no next, a next within the acceptance radius, at another altitude, or the target's
+    # altitude not reached yet (NAV_MC_ALT_RAD)
+    nan3 = (math.nan, math.nan, math.nan)
+    assert corner_speed((0.0, 10.0, -10.0), (0.0, 20.0, -10.0), nan3, lim, 0.5, 5.0) == 0.0
+    assert corner_speed((0.0, 10.0, -10.0), (0.0, 20.0, -10.0), (0.3, 20.0, -10.0), lim, 0.5, 5.0) == 0.0
+    assert corner_speed((0.0, 10.0, -10.0), (0.0, 20.0, -10.0), (0.0, 50.0, 0.0), lim, 0.5, 5.0) == 0.0
+    assert corner_speed((0.0, 10.0, -5.0), (0.0, 20.0, -10.0), (0.0, 50.0, -10.0), lim, 0.5, 5.0) == 0.0
     # computeMaxSpeedFromDistance(jerk 4, accel 3, d, 0): 0.5 (-9 + sqrt(81 + 24 d))
     assert max_speed_from_distance(4.0, 3.0, 10.0, 0.0) == pytest.approx(0.5 * (-9 + math.sqrt(321)))
     assert max_speed_from_distance(4.0, 3.0, 0.0, 1.1) == pytest.approx(1.1)

@@ -39,13 +39,16 @@ from uavtest.px4.modes import NavState
 from uavtest.sitl.flight_task_orbit import FlightTaskOrbit
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.mav import MavCmd, MavSeverity
-from uavtest.sitl.mc_pos_control import NO_TRACK, Goal, GoalKind, wrap_pi
+from uavtest.sitl.mc_pos_control import NO_NEXT, NO_TRACK, Goal, GoalKind, wrap_pi
 from uavtest.sitl.mission import NavItem, has_position
 from uavtest.sitl.navigator.geofence import NAV_RALLY_POINT, Geofence, rally_destination
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.uorb import GeofenceResult
 
 __all__ = ["Event", "EventKind", "Navigator", "State"]
+
+#: items whose successor becomes the triplet's next unless they hold (param1) or stop
+_PASS_THROUGH = frozenset({MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_TIME})
 
 
 class EventKind(Enum):
@@ -299,6 +302,7 @@ class Navigator:
         g.kind, g.x, g.y, g.z, g.yaw, g.speed = kind, x, y, z, yaw, self.speed
         g.prev = NO_TRACK
         g.acc_rad = math.nan
+        g.next = NO_NEXT
         return g
 
     # ------------------------------------------------------------------ mission
@@ -310,13 +314,14 @@ class Navigator:
             x, y = self.proj.project(item.lat, item.lon)
         return x, y, -item.alt_rel(self.home_alt)
 
-    def _next_position(self, after: int, st: State) -> tuple[float, float] | None:
+    def _next_setpoint(self, after: int, st: State) -> tuple[float, float, float] | None:
+        """position_setpoint_triplet.next: the first item with a position after ``after``
+        (Mission::getNextPositionItems); None at a Return item or the mission's end."""
         for item in self.mission[after + 1 :]:
             if item.command == MavCmd.NAV_RETURN_TO_LAUNCH:
-                return self.home[0], self.home[1]
+                return None
             if has_position(item):
-                x, y, _ = self._local(item, st)
-                return x, y
+                return self._local(item, st)
         return None
 
     def _advance(self, st: State, now: float, *, report: bool = True) -> None:
@@ -435,6 +440,13 @@ class Navigator:
                 if "prev_x" in s.extra:
                     g.prev = (s.extra["prev_x"], s.extra["prev_y"])
                 g.acc_rad = radius
+                # Mission::setActiveMissionItems: a waypoint without a hold time hands its
+                # successor to the triplet's next, so the trajectory turns through the corner
+                # instead of stopping (a hold time or autocontinue 0 brakes: next invalid)
+                if cmd in _PASS_THROUGH and item.param1 <= 0 and item.autocontinue:
+                    nxt = self._next_setpoint(self.current, st)
+                    if nxt is not None:
+                        g.next = nxt
                 return g
         if s.phase == Phase.YAW:
             err = abs(wrap_pi(s.yaw - st.yaw)) if math.isfinite(s.yaw) else 0.0
