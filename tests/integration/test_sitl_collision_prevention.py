@@ -141,7 +141,9 @@ def test_position_mode_at_a_wall_stops_cp_dist_short(pilot) -> None:
     assert not any("crash" in t for t in p.texts), p.texts
     assert p.armed and p.mode == POSCTL
     closest = WALL_FACE_X - p.max_x
-    assert 1.0 < closest < 2.0, closest  # CP_DIST 2 less the braking overshoot
+    # CP_DIST 2 less the braking overshoot: about 1 m, 1.1 m since the velocity loop's D term
+    # (MPC_XY_VEL_D_ACC on the measured deceleration, as PX4's PositionControl) softens braking
+    assert 0.8 < closest < 2.0, closest
     assert WALL_FACE_X - p.x == pytest.approx(2.0, abs=0.5)  # held there, stick still pushed
     od = p.seen["OBSTACLE_DISTANCE"][-1]  # CP's map (obstacle_distance_fused), 10-degree bins
     assert od.frame == 12 and od.increment_f == 10.0 and len(od.distances) == 72
