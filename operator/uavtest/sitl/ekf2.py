@@ -50,8 +50,10 @@ TAU_V = 1.0  # s: velocity error correlation time
 SIGMA_XY = 0.12  # m: standard deviation of the horizontal position error
 SIGMA_Z = 0.08  # m: of the altitude error
 SIGMA_BIAS_Z = 0.12  # m/s: vertical velocity bias, not integrated into the altitude
-TAU_HEADING = 3.0  # s
-SIGMA_HEADING = 0.005  # rad
+TAU_HEADING = 5.0  # s: the heading error's correlation time on a leg
+SIGMA_HEADING = math.radians(2.2)  # rad: its spread within a flight, on straight legs
+HEADING_OFFSET_MEAN = math.radians(2.4)  # rad: its per-flight offset (PX4 SIH: mostly positive)
+HEADING_OFFSET_SPREAD = math.radians(2.6)  # rad
 TAU_BIAS = 4.0  # s: velocity bias correlation time
 SIGMA_BIAS = 0.22  # m/s: per axis
 #: stationary standard deviation of x for x' = -x / TAU + v, v Gauss-Markov(sigma_v, TAU_V):
@@ -68,6 +70,7 @@ class Estimator:
     """
 
     __slots__ = (
+        "_ch",
         "_cvx",
         "_cvy",
         "_cvz",
@@ -78,6 +81,7 @@ class Estimator:
         "by",
         "bz",
         "eh",
+        "eh_offset",
         "evx",
         "evy",
         "evz",
@@ -86,7 +90,9 @@ class Estimator:
         "ez",
     )
 
-    def __init__(self, rng: random.Random, rng_z: random.Random | None = None) -> None:
+    def __init__(
+        self, rng: random.Random, rng_z: random.Random | None = None, rng_heading: random.Random | None = None
+    ) -> None:
         self._rng = rng
         #: the vertical bias draws from its own stream: the horizontal errors of a seed stay
         #: what they were before the vertical channel was calibrated
@@ -96,7 +102,11 @@ class Estimator:
         sx, sy, sz = self._sv
         self._cvx, self._cvy, self._cvz = g(0, sx), g(0, sy), g(0, sz)
         self.ex, self.ey, self.ez = g(0, SIGMA_XY), g(0, SIGMA_XY), g(0, SIGMA_Z)
-        self.eh = g(0, SIGMA_HEADING)
+        self._ch = g(0, SIGMA_HEADING)
+        #: the heading error's per-flight offset, from its own stream (the other errors of a seed
+        #: stay what they were before it was calibrated)
+        self.eh_offset = (rng_heading or random.Random(0)).gauss(HEADING_OFFSET_MEAN, HEADING_OFFSET_SPREAD)
+        self.eh = self._ch + self.eh_offset
         self.bx, self.by = g(0, SIGMA_BIAS), g(0, SIGMA_BIAS)
         self.bz = self._rng_z.gauss(0, SIGMA_BIAS_Z)
         self.evx, self.evy = self._cvx + self.bx, self._cvy + self.by
@@ -124,4 +134,5 @@ class Estimator:
         self.bz = ab * self.bz + bb * (SIGMA_BIAS_Z / SIGMA_BIAS) * self._rng_z.gauss(0.0, 1.0)
         self.evz = self._cvz + self.bz
         ah = math.exp(-dt / TAU_HEADING)
-        self.eh = ah * self.eh + math.sqrt(1 - ah * ah) * SIGMA_HEADING * g(0.0, 1.0)
+        self._ch = ah * self._ch + math.sqrt(1 - ah * ah) * SIGMA_HEADING * g(0.0, 1.0)
+        self.eh = self._ch + self.eh_offset

@@ -149,7 +149,11 @@ class Vehicle:
         )
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
-        self.est = Estimator(random.Random(f"{seed}:estimator"), random.Random(f"{seed}:estimator-z"))
+        self.est = Estimator(
+            random.Random(f"{seed}:estimator"),
+            random.Random(f"{seed}:estimator-z"),
+            random.Random(f"{seed}:estimator-heading"),
+        )
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed, config.range_sensor)
@@ -474,9 +478,13 @@ class Vehicle:
             self._range_and_cp_inputs(t, cp)  # type: ignore[arg-type]
         if commander.armed and not commander.crashed:
             self.ctrl.dist_bottom = -b.z  # SIH's downward range finder sees the true height
-            self._cmd = self.ctrl.update(
+            cax, cay, caz, cyr = self.ctrl.update(
                 dt, goal, st.x, st.y, st.z, b.vx + e.evx, b.vy + e.evy, b.vz + e.evz, st.yaw
             )
+            # the attitude controller tilts the *estimated* body: with EKF2's heading off by eh,
+            # the real thrust leans eh the other way (PX4 SIH: 2-5 degrees on a leg)
+            c, s = math.cos(e.eh), math.sin(e.eh)
+            self._cmd = (c * cax + s * cay, c * cay - s * cax, caz, cyr)
             b.motors = True
         else:
             self._cmd = IDLE
