@@ -216,8 +216,10 @@ def test_fence_plan_round_trip_and_hold_at_an_exclusion_circle(vehicle):
     v.sticks = (0, 0, 500, 0)
     v.fly_for(15)
     # PX4 (navigator_main.cpp geofence_breach_check, GF_ACTION_LOITER without GF_PREDICT) holds
-    # where the breach was seen: the vehicle brakes past it, then comes back to it
-    assert v.mode == LOITER and v.armed and 29.0 <= v.pos[0] < 33.0 and abs(v.pos[1]) < 1.0
+    # where the breach was seen: the vehicle brakes past it, then comes back to it. "Forward" is
+    # EKF2's heading, a few degrees off the truth (PX4 SIH: 2.4 +- 2.6 degrees), so 30 m of stick
+    # North end up to a couple of metres East or West
+    assert v.mode == LOITER and v.armed and 29.0 <= v.pos[0] < 33.0 and abs(v.pos[1]) < 3.0
 
 
 def test_polygon_breach_returns_to_the_closest_rally_point(vehicle, tmp_path: Path):
