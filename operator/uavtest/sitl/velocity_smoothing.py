@@ -134,13 +134,23 @@ def synchronize(px: Profile, py: Profile, vx_sp: float, vy_sp: float, a_max: flo
 def advance(p: Profile, t: float) -> tuple[float, float, float]:
     """(acceleration, velocity, position) ``t`` seconds along the profile."""
     a, v, x = p.a0, p.v0, p.x0
-    for dur, jerk in ((p.t1, p.direction * p.jerk), (p.t2, 0.0), (p.t3, -p.direction * p.jerk)):
-        if t <= 0.0:
-            break
-        s = min(t, dur)
-        x += v * s + 0.5 * a * s * s + jerk * s * s * s / 6.0
-        v += a * s + 0.5 * jerk * s * s
-        a += jerk * s
+    j = p.direction * p.jerk
+    s = p.t1 if t > p.t1 else t
+    if s > 0.0:  # jerk towards the acceleration
+        x += v * s + 0.5 * a * s * s + j * s * s * s / 6.0
+        v += a * s + 0.5 * j * s * s
+        a += j * s
+        t -= s
+    if t > 0.0:  # the acceleration held
+        s = p.t2 if t > p.t2 else t
+        x += v * s + 0.5 * a * s * s
+        v += a * s
+        t -= s
+    if t > 0.0:  # jerk back to zero acceleration
+        s = p.t3 if t > p.t3 else t
+        x += v * s + 0.5 * a * s * s - j * s * s * s / 6.0
+        v += a * s - 0.5 * j * s * s
+        a -= j * s
         t -= s
     if t > 0.0:  # constant velocity after the profile
         x += v * t

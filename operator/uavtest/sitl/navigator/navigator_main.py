@@ -108,6 +108,8 @@ class _Step:
     yaw: float = math.nan
     speed: float = math.nan  # a reposition's ground speed (nan: the navigator's cruise speed)
     rtl: _Rtl | None = None
+    #: position_setpoint_triplet.next for the item, looked up once (None: not yet)
+    next: tuple[float, float, float] | None = None
     extra: dict[str, float] = field(default_factory=dict)
 
 
@@ -444,9 +446,9 @@ class Navigator:
                 # successor to the triplet's next, so the trajectory turns through the corner
                 # instead of stopping (a hold time or autocontinue 0 brakes: next invalid)
                 if cmd in _PASS_THROUGH and item.param1 <= 0 and item.autocontinue:
-                    nxt = self._next_setpoint(self.current, st)
-                    if nxt is not None:
-                        g.next = nxt
+                    if s.next is None:  # once per item
+                        s.next = self._next_setpoint(self.current, st) or NO_NEXT
+                    g.next = s.next
                 return g
         if s.phase == Phase.YAW:
             err = abs(wrap_pi(s.yaw - st.yaw)) if math.isfinite(s.yaw) else 0.0
