@@ -43,12 +43,18 @@ def test_slow_takeoff_ramp_leaves_the_ground_instead_of_landing(ramp_s: float):
     assert -v.body.z > 4.0
 
 
-def test_landing_is_still_detected_after_a_land_command():
-    v = ready_vehicle(seed=25)
+def _landing_from_3m(seed: int):
+    """A vehicle taken off to 3 m and told to land (NAV_LAND)."""
+    v = ready_vehicle(seed=seed)
     command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
     command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, float("nan"), float("nan"), float("nan"), 488.0 + 3)
     v.fly_until(lambda v: -v.body.z > 2.5, 30_000_000)
     command(v, MavCmd.NAV_LAND)
+    return v
+
+
+def test_landing_is_still_detected_after_a_land_command():
+    v = _landing_from_3m(25)
     assert v.nav_state == NavState.AUTO_LAND
     v.fly_until(lambda v: not v.armed, 60_000_000)
     assert v.landed and not v.armed
@@ -107,11 +113,7 @@ def test_mission_landing_takes_px4_sih_time(shared_data: Path):
 
 
 def test_no_landing_is_detected_in_the_air_and_it_follows_touchdown_by_px4s_hysteresis():
-    v = ready_vehicle(seed=3)
-    command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
-    command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, float("nan"), float("nan"), float("nan"), 488.0 + 3)
-    v.fly_until(lambda v: -v.body.z > 2.5, 30_000_000)
-    command(v, MavCmd.NAV_LAND)
+    v = _landing_from_3m(3)
     seen_landed_in_air = []
 
     def touched(v) -> bool:
