@@ -37,6 +37,12 @@ from pyulog import ULog
 from rich.console import Console
 from rich.table import Table
 
+from uavtest.analysis.attitude_response import (
+    AttitudeResponse,
+    body_z_from_quaternion,
+    body_z_from_thrust,
+)
+from uavtest.analysis.attitude_response import fit as fit_attitude_response
 from uavtest.analysis.fidelity import (
     FIGURES,
     FlightFigures,
@@ -119,6 +125,8 @@ class Flights:
     error_series: list = dataclasses.field(default_factory=list)
     #: its vertical velocity error per flight at 10 Hz (``displacement_errors`` of z, vz)
     vertical_series: list = dataclasses.field(default_factory=list)
+    #: per flight, how the tilt follows the thrust setpoint (``analysis.attitude_response``)
+    attitude: list[AttitudeResponse] = dataclasses.field(default_factory=list)
 
 
 def _measure(ulog: ULog, into: Flights) -> None:
@@ -133,6 +141,19 @@ def _measure(ulog: ULog, into: Flights) -> None:
     vertical = displacement_errors(t[air], lp["z"][air], lp["vz"][air])
     if len(vertical):
         into.vertical_series.append(vertical)
+    sp = ulog.get_dataset("vehicle_local_position_setpoint").data
+    att = ulog.get_dataset("vehicle_attitude").data
+    thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
+    q = np.column_stack([att[f"q[{i}]"] for i in range(4)])
+    into.attitude.append(
+        fit_attitude_response(
+            sp["timestamp"] / 1e6,
+            body_z_from_thrust(thrust),
+            att["timestamp"] / 1e6,
+            body_z_from_quaternion(q),
+            (traj.t[0], traj.t[-1]),
+        )
+    )
 
 
 def px4_flights(names: list[str], extra: Sequence[Path] = ()) -> Flights:
@@ -229,7 +250,21 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "",
             "",
         )
+    if px4_all.attitude and ours_all.attitude:
+        t.add_row(
+            "attitude response (tilt after thrust setpoint): delay + lag, median",
+            _response(px4_all.attitude),
+            _response(ours_all.attitude),
+            "",
+            "",
+        )
     return t, ok
+
+
+def _response(fits: list[AttitudeResponse]) -> str:
+    delay = statistics.median(f.delay for f in fits)
+    tau = statistics.median(f.tau for f in fits)
+    return f"{delay:.2f} + {tau:.2f} s"
 
 
 def main() -> None:

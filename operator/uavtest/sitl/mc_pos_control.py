@@ -54,7 +54,7 @@ class GoalKind(Enum):
     OFFBOARD = "offboard"  # trajectory_setpoint of an offboard client: x, y, z and/or vel, yaw / yawspeed
 
 
-NO_TRACK = (math.nan, math.nan)
+NO_TRACK = (math.nan, math.nan, math.nan)
 NO_NEXT = (math.nan, math.nan, math.nan)
 
 
@@ -69,9 +69,9 @@ class Goal:
     sticks: tuple[float, float, float, float] = (0.0, 0.0, 0.5, 0.0)  # x fwd, y right, z thrust 0..1, r yaw
     vel: tuple[float, float, float] = (math.nan, math.nan, math.nan)  # offboard velocity (nan: not set)
     yawspeed: float = math.nan  # offboard yaw rate (nan: not set)
-    #: POSITION: the previous waypoint (position_setpoint_triplet.previous), the start of the
-    #: track to x, y; NO_TRACK: none (fly straight to x, y)
-    prev: tuple[float, float] = NO_TRACK
+    #: POSITION: the previous waypoint (position_setpoint_triplet.previous: x, y, z), the start
+    #: of the track to x, y, z; NO_TRACK: none (fly straight to x, y)
+    prev: tuple[float, float, float] = NO_TRACK
     acc_rad: float = math.nan  # POSITION: the target's acceptance radius (nan: NAV_ACC_RAD)
     #: POSITION: position_setpoint_triplet.next (x, y, z), the waypoint after the target that the
     #: trajectory turns towards without stopping; NaN: none (stop at the target)
@@ -171,32 +171,39 @@ def max_speed_from_distance(jerk: float, accel: float, distance: float, final: f
     return max(0.5 * (-b + math.sqrt(b * b - 4.0 * c)), final)
 
 
-def track_target(goal: Goal, x: float, y: float, acc_rad: float) -> tuple[float, float, bool]:
+def track_target(
+    goal: Goal, x: float, y: float, z: float, acc_rad: float
+) -> tuple[float, float, float, bool]:
     """Where a POSITION goal's trajectory heads now: FlightTaskAuto's internal waypoints.
 
-    ``FlightTaskAuto::_getCurrentState`` / ``_updateInternalWaypoints`` (PX4 v1.15): with a
-    previous waypoint, the vehicle follows the line from it to the target; when it is more than
-    the acceptance radius off that line ("offtrack") it heads for the closest point of the line
-    first, and when the previous waypoint is still ahead of it, for that waypoint first. Returns
-    (x, y, via): via is True while heading for such an internal waypoint.
+    ``FlightTaskAuto::_getCurrentState`` / ``_updateInternalWaypoints`` (PX4 v1.15), in 3-D as
+    PX4 computes them (``Vector3f``): with a previous waypoint, the vehicle follows the line from
+    it to the target; when it is more than the acceptance radius off that line ("offtrack",
+    altitude included) it heads for the closest point of the line first, and when the previous
+    waypoint is still ahead of it, for that waypoint first. Returns (x, y, z, via): via is True
+    while heading for such an internal waypoint.
     """
-    px, py = goal.prev
+    px, py, pz = goal.prev
     if px != px:
-        return goal.x, goal.y, False
-    ux, uy = goal.x - px, goal.y - py
-    length = math.hypot(ux, uy)
+        return goal.x, goal.y, goal.z, False
+    if pz != pz:
+        pz = goal.z
+    ux, uy, uz = goal.x - px, goal.y - py, goal.z - pz
+    length = math.sqrt(ux * ux + uy * uy + uz * uz)
     if length < 1e-6:
-        return goal.x, goal.y, False
-    ux, uy = ux / length, uy / length
-    if ux * (goal.x - x) + uy * (goal.y - y) < 0.0:  # target behind: straight to it
-        return goal.x, goal.y, False
-    along = ux * (x - px) + uy * (y - py)
-    if along < 0.0 and math.hypot(x - px, y - py) > acc_rad:  # previous waypoint in front
-        return px, py, True
-    cx, cy = px + ux * along, py + uy * along
-    if math.hypot(x - cx, y - cy) > acc_rad:  # offtrack: back to the closest point of the track
-        return cx, cy, True
-    return goal.x, goal.y, False
+        return goal.x, goal.y, goal.z, False
+    ux, uy, uz = ux / length, uy / length, uz / length
+    if ux * (goal.x - x) + uy * (goal.y - y) + uz * (goal.z - z) < 0.0:  # target behind: straight to it
+        return goal.x, goal.y, goal.z, False
+    dx, dy, dz = x - px, y - py, z - pz
+    along = ux * dx + uy * dy + uz * dz
+    if along < 0.0 and dx * dx + dy * dy + dz * dz > acc_rad * acc_rad:  # previous waypoint in front
+        return px, py, pz, True
+    cx, cy, cz = px + ux * along, py + uy * along, pz + uz * along
+    ox, oy, oz = x - cx, y - cy, z - cz
+    if ox * ox + oy * oy + oz * oz > acc_rad * acc_rad:  # offtrack: back to the closest point of the track
+        return cx, cy, cz, True
+    return goal.x, goal.y, goal.z, False
 
 
 def l1_point(
@@ -270,6 +277,8 @@ class Controller:
         self.direct_velocity = False
         self.hold_max_xy = 0.8
         self.xy_locked = False
+        #: the last acceleration command (NED, 0 in a hover: ``update``'s), set by the vehicle for the log
+        self.acc_sp = (0.0, 0.0, 0.0)
 
     def reset(self, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float) -> None:
         """Restart the reference at the vehicle's state (mode switch, arming)."""
@@ -440,16 +449,16 @@ class Controller:
             speed = goal.speed if goal.speed == goal.speed else lim.cruise
             speed = min(speed, lim.vel_max)
             acc_rad = goal.acc_rad if goal.acc_rad == goal.acc_rad else lim.acc_rad
-            tx, ty, via = track_target(goal, x, y, acc_rad)
+            tx, ty, tz, via = track_target(goal, x, y, z, acc_rad)
             # PositionSmoothing's waypoints {trajectory, target, next}: an internal waypoint before
             # the target is passed towards the target; the target towards the triplet's next
             nxt = (goal.x, goal.y, goal.z) if via else goal.next
-            final = corner_speed((self.px, self.py, self.pz), (tx, ty, goal.z), nxt, lim, acc_rad, speed)
+            final = corner_speed((self.px, self.py, self.pz), (tx, ty, tz), nxt, lim, acc_rad, speed)
             # the line the trajectory follows: from the previous waypoint, or from where the
             # vehicle is when it heads for an internal waypoint first (FlightTaskAuto's _prev_wp)
-            line = (x, y) if via else (goal.prev if goal.prev[0] == goal.prev[0] else None)
+            line = (x, y) if via else (goal.prev[:2] if goal.prev[0] == goal.prev[0] else None)
             self._xy_reference(dt, tx, ty, speed, x, y, final=final, acc_rad=acc_rad, line=line)
-            self._z_reference(dt, goal.z)
+            self._z_reference(dt, tz)
             target_yaw = goal.yaw
             if math.isnan(target_yaw) and lim.yaw_mode == 0:
                 # FlightTaskAuto::_set_heading_from_mode: heading towards the (internal) target

@@ -20,7 +20,15 @@ from uavtest.spec.models import Obstacle, Wind
 __all__ = ["GRAVITY", "Body", "Box", "WindModel", "World"]
 
 GRAVITY = 9.80665
-TAU_TILT = 0.12  # s, horizontal acceleration (attitude) response
+#: PX4 SIH's attitude response: in all nine shared SIH logs the body's tilt (vehicle_attitude)
+#: follows the direction of the thrust setpoint (vehicle_local_position_setpoint.thrust) after a
+#: 0.09 s delay and a 0.06 s first-order lag (best fit, 0.007-0.009 rms of the tilt's sine): PX4's
+#: attitude and rate controllers, control allocation and SIH's motors between them
+ATTITUDE_DELAY = 0.10  # s
+TAU_TILT = 0.06  # s
+#: the competition's system under test (PX4 in Gazebo, iris; the local planner's calibration):
+#: a first-order horizontal acceleration response without delay
+TAU_TILT_GAZEBO = 0.12  # s
 TAU_THRUST = 0.05  # s, vertical thrust response
 DRAG_LINEAR = 1.0  # 1/s: PX4 SIH's first-order drag, SIH_KDV / SIH_MASS (1.0 N s/m / 1 kg)
 DRAG_QUADRATIC = 0.0  # 1/m: SIH has none
@@ -166,6 +174,9 @@ class Body:
         "ax",
         "ay",
         "az",
+        "delay_i",
+        "delay_x",
+        "delay_y",
         "kl",
         "kq",
         "motors",
@@ -186,6 +197,7 @@ class Body:
         tau_tilt: float = TAU_TILT,
         drag_scale: float = 1.0,
         drag: tuple[float, float] = (DRAG_LINEAR, DRAG_QUADRATIC),
+        delay_steps: int = 0,
     ) -> None:
         self.x = self.y = self.z = 0.0
         self.vx = self.vy = self.vz = 0.0
@@ -197,6 +209,10 @@ class Body:
         self.tau_tilt = tau_tilt
         self.kl = drag[0] * drag_scale
         self.kq = drag[1] * drag_scale
+        # the horizontal acceleration commands of the last ``delay_steps`` physics steps (a ring)
+        self.delay_x = [0.0] * delay_steps
+        self.delay_y = [0.0] * delay_steps
+        self.delay_i = 0
 
     def step(
         self, dt: float, cax: float, cay: float, caz: float, cyawrate: float, wn: float, we: float, wd: float
@@ -206,6 +222,12 @@ class Body:
             cax = cay = 0.0
             caz = GRAVITY  # free fall
             cyawrate = 0.0
+        if self.delay_x:  # the attitude loops' delay: act on the command of delay_steps ago
+            i = self.delay_i
+            dx, dy = self.delay_x, self.delay_y
+            dx[i], cax = cax, dx[i]
+            dy[i], cay = cay, dy[i]
+            self.delay_i = i + 1 if i + 1 < len(dx) else 0
         k = dt / self.tau_tilt
         self.ax += (cax - self.ax) * k
         self.ay += (cay - self.ay) * k

@@ -48,6 +48,7 @@ __all__ = [
     "VehicleGlobalPosition",
     "VehicleLandDetected",
     "VehicleLocalPosition",
+    "VehicleLocalPositionSetpoint",
     "VehicleStatus",
     "command",
     "local_position",
@@ -356,6 +357,25 @@ class TrajectorySetpoint:
     position: tuple[float, float, float] = ulog("float[3]")
     velocity: tuple[float, float, float] = ulog("float[3]")
     acceleration: tuple[float, float, float] = ulog("float[3]")
+    yaw: float = ulog("float")
+    yawspeed: float = ulog("float")
+
+
+@topic("vehicle_local_position_setpoint")
+@dataclass(slots=True)
+class VehicleLocalPositionSetpoint:
+    """PX4 msg/VehicleLocalPositionSetpoint.msg: what PositionControl made of the trajectory
+    setpoint, its acceleration (NED, gravity excluded) and normalised thrust setpoints."""
+
+    timestamp: int = ulog("uint64_t")
+    x: float = ulog("float")
+    y: float = ulog("float")
+    z: float = ulog("float")
+    vx: float = ulog("float")
+    vy: float = ulog("float")
+    vz: float = ulog("float")
+    acceleration: tuple[float, float, float] = ulog("float[3]")
+    thrust: tuple[float, float, float] = ulog("float[3]")
     yaw: float = ulog("float")
     yawspeed: float = ulog("float")
 

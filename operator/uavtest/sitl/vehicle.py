@@ -54,7 +54,18 @@ from uavtest.sitl.protocols import MissionProtocol, ParamProtocol
 from uavtest.sitl.recorder import FlightRecorder, LogSink
 from uavtest.sitl.sensor_depth_sim import DepthCamera
 from uavtest.sitl.simulation import Simulation
-from uavtest.sitl.simulator_sih import DRAG_GAZEBO_IRIS, DRAG_LINEAR, DRAG_QUADRATIC, Body, WindModel, World
+from uavtest.sitl.simulator_sih import (
+    ATTITUDE_DELAY,
+    DRAG_GAZEBO_IRIS,
+    DRAG_LINEAR,
+    DRAG_QUADRATIC,
+    GRAVITY,
+    TAU_TILT,
+    TAU_TILT_GAZEBO,
+    Body,
+    WindModel,
+    World,
+)
 from uavtest.sitl.telemetry import MODES, ONBOARD, Schedule
 from uavtest.sitl.ulog_writer import LOG_LEVEL
 from uavtest.spec.models import Avoidance, Home, Obstacle, RangeSensor, UavTestSpec, Wind
@@ -75,6 +86,7 @@ _SETPOINT_TYPE = {
     GoalKind.LAND: topics.SETPOINT_TYPE_LAND,
     GoalKind.IDLE: topics.SETPOINT_TYPE_IDLE,
 }
+_POSITION_SP = topics.SETPOINT_TYPE_POSITION
 #: manual nav state → the flight task's goal kind (attitude for the others)
 _MANUAL_GOAL = {NavState.POSCTL: GoalKind.VELOCITY, NavState.ALTCTL: GoalKind.ALTITUDE}
 _DESCEND = NavState.DESCEND
@@ -143,9 +155,10 @@ class Vehicle:
         # the local planner models the competition's system under test (PX4 + PX4-Avoidance in
         # Gazebo, iris); everything else flies PX4 SIH's physics
         self.body = Body(
-            tau_tilt=0.12 * variation.uniform(0.9, 1.1),
+            tau_tilt=(TAU_TILT_GAZEBO if planner else TAU_TILT) * variation.uniform(0.9, 1.1),
             drag_scale=variation.uniform(0.93, 1.07),
             drag=DRAG_GAZEBO_IRIS if planner else (DRAG_LINEAR, DRAG_QUADRATIC),
+            delay_steps=0 if planner else round(ATTITUDE_DELAY / (STEP_US / 1e6)),
         )
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
@@ -481,6 +494,7 @@ class Vehicle:
             cax, cay, caz, cyr = self.ctrl.update(
                 dt, goal, st.x, st.y, st.z, b.vx + e.evx, b.vy + e.evy, b.vz + e.evz, st.yaw
             )
+            self.ctrl.acc_sp = (cax, cay, caz)  # logged as vehicle_local_position_setpoint
             # the attitude controller tilts the *estimated* body: with EKF2's heading off by eh,
             # the real thrust leans eh the other way (PX4 SIH: 2-5 degrees on a leg)
             c, s = math.cos(e.eh), math.sin(e.eh)
@@ -768,6 +782,26 @@ class Vehicle:
                     t, (c.px, c.py, c.pz), (c.vx, c.vy, c.vz), (c.ax, c.ay, 0.0), c.yaw_sp, c.yawrate_sp
                 )
             )
+            if self.commander.armed:
+                # PositionControl's output: the acceleration setpoint (NED, 0 in a hover) and
+                # the thrust normalised by MPC_THR_HOVER, as PX4 converts one into the other
+                ax, ay, az = c.acc_sp
+                h = self.params["MPC_THR_HOVER"] / GRAVITY
+                rec.data(
+                    topics.VehicleLocalPositionSetpoint(
+                        t,
+                        c.px,
+                        c.py,
+                        c.pz,
+                        c.vx,
+                        c.vy,
+                        c.vz,
+                        (ax, ay, az),
+                        (ax * h, ay * h, (az - GRAVITY) * h),
+                        c.yaw_sp,
+                        c.yawrate_sp,
+                    )
+                )
             planner = self.sim.planner  # the triplet is the navigator's, whatever avoidance flies
             self._log_setpoint(t, self.goal if planner is None or not planner.active else planner.goal)
         commander = self.commander
@@ -788,9 +822,17 @@ class Vehicle:
             return
         lat, lon = self.proj.reproject(g.x, g.y)
         speed = g.speed if g.speed == g.speed else self.limits.cruise
-        cur = topics.setpoint(
-            t, lat, lon, self.home_alt - g.z, g.yaw, kind, self.params["NAV_ACC_RAD"], speed
-        )
-        self.recorder.data(
-            topics.PositionSetpointTriplet(t, topics.INVALID_SETPOINT, cur, topics.INVALID_SETPOINT)
-        )
+        acc = g.acc_rad if g.acc_rad == g.acc_rad else self.params["NAV_ACC_RAD"]
+        cur = topics.setpoint(t, lat, lon, self.home_alt - g.z, g.yaw, kind, acc, speed)
+        # the track's start and the corner after the target, as PX4's navigator publishes them
+        # (Mission::setActiveMissionItems); both logged as position setpoints
+        prev = nxt = topics.INVALID_SETPOINT
+        if g.kind is GoalKind.POSITION and g.prev[0] == g.prev[0]:
+            plat, plon = self.proj.reproject(g.prev[0], g.prev[1])
+            pz = g.prev[2] if g.prev[2] == g.prev[2] else g.z
+            prev = topics.setpoint(t, plat, plon, self.home_alt - pz, math.nan, _POSITION_SP, acc, speed)
+        if g.kind is GoalKind.POSITION and g.next[0] == g.next[0]:
+            nlat, nlon = self.proj.reproject(g.next[0], g.next[1])
+            nalt = self.home_alt - g.next[2]
+            nxt = topics.setpoint(t, nlat, nlon, nalt, math.nan, _POSITION_SP, acc, speed)
+        self.recorder.data(topics.PositionSetpointTriplet(t, prev, cur, nxt))

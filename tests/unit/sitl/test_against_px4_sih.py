@@ -14,6 +14,12 @@ import numpy as np
 import pytest
 from pyulog import ULog
 
+from uavtest.analysis.attitude_response import (
+    AttitudeResponse,
+    body_z_from_quaternion,
+    body_z_from_thrust,
+    fit,
+)
 from uavtest.analysis.similarity import dtw
 from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
 from uavtest.sitl.inprocess import fly_mission
@@ -42,3 +48,29 @@ def test_paths_and_altitudes_match_px4_sih(shared_data: Path, n: int):
         end_ours = np.array([ours.x[-1], ours.y[-1]])
         end_px4 = np.array([px4.x[-1], px4.y[-1]])
         assert np.linalg.norm(end_ours - end_px4) < 2.0
+
+
+def _attitude_response(ulog: ULog) -> AttitudeResponse:
+    window = trajectory_from_ulog(ulog)
+    sp = ulog.get_dataset("vehicle_local_position_setpoint").data
+    att = ulog.get_dataset("vehicle_attitude").data
+    return fit(
+        sp["timestamp"] / 1e6,
+        body_z_from_thrust(np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])),
+        att["timestamp"] / 1e6,
+        body_z_from_quaternion(np.column_stack([att[f"q[{i}]"] for i in range(4)])),
+        (window.t[0], window.t[-1]),
+    )
+
+
+def test_the_tilt_follows_the_thrust_setpoint_as_late_as_px4_sihs(shared_data: Path):
+    """PX4 v1.15 SIH tilts the body 0.09-0.10 s after its thrust setpoint asks, then with a
+    0.06 s lag (its attitude and rate loops and SIH's motors); the built-in vehicle's logged
+    setpoint and attitude give the same within 0.03 s (a plain 0.12 s lag fits as 0.00 + 0.12)."""
+    px4 = _attitude_response(read_ulog(shared_data / "px4-sih" / "competition-mission2-run2.ulg"))
+    config, items = competition(shared_data, 2, seed=0)
+    sink = MemorySink()
+    fly_mission(config, items, sink=sink)
+    ours = _attitude_response(ULog(io.BytesIO(sink.logs[0])))
+    assert ours.delay == pytest.approx(px4.delay, abs=0.03), (ours, px4)
+    assert ours.tau == pytest.approx(px4.tau, abs=0.03), (ours, px4)

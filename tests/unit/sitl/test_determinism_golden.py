@@ -206,27 +206,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: and for PositionSmoothing's per-axis VelocitySmoothing (time-optimal, jerk-limited, x and y
 #: synchronized) and mission corners turned at computeMaxSpeedInWaypoint's speed (MPC_XY_TRAJ_P);
 #: and for EKF2's heading error calibrated on PX4 SIH's ground truth (2.4 +- 2.6 degrees per flight,
-#: 2.2 within), leaning the real thrust against it.
+#: 2.2 within), leaning the real thrust against it; and for PX4 SIH's attitude response (the tilt
+#: 0.10 s after the thrust setpoint, then a 0.06 s lag, as all nine SIH logs show), FlightTaskAuto's
+#: offtrack state in 3-D, the triplet's previous and next and vehicle_local_position_setpoint logged.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "0e15169e751439f89d4be9df67b83f99acedcebbebf8238d15d701a567ae441b",
-        "b380f287e1d0cb06d3661bda03a2cf36c4868a21f4917406156ba529c3a55ff3",
+        "ee1e485405502f798510af14a9ff723a60cff020dad607c6c306ca0af2fc0bdc",
+        "94d20f769f513ef187337d1866f0c014bc8c7251e4521b441acd79d172b1a69c",
     ),
     "manual_and_rtl": (
-        "4f2abedec50b54f60623c0682d6f6f43d7bb533c2d7c6644dc775d45163d3350",
-        "8a1b804450565b30424f58d3c18002b30911f8d2d5078810cfc64420f4f7c70c",
+        "5b459e4cf78a698ff5e096a9071152e0f31d3faea8d2e80e905a4f209a9b3ece",
+        "c8d0dd90f0d3c3a5db3e189053f21a5ba8f77d3fbb6a768c478b6685756b01e6",
     ),
     "datalink_loss": (
-        "a799d905ed3cee230cd1a64a3bd3ac8ae71461a3025ab079f3a562b70280274e",
-        "8e455b762b81b2de86078456a656881ca2db2c2018e00688641eecf9ccf860d5",
+        "97880e39d53ca6d7512fe198af8ad4d204c6120ece871627e94bd08cf88edae7",
+        "72bc4e13ad8468663b9e81cdb0eadbf7e98d7d8bcb2c9f489f777ca360207e69",
     ),
     "crash": (
-        "fbe4d4e55e0f10d21f0c43b332d9cb01e1926878abeeb73cf8f2630ab4bceab4",
-        "619b2dbc28ee57748cfbd45d394f298f580b205e182c3ea359734086e3ebc5ad",
+        "f9db1cd82dcb7f79b143479ea4e82ffbd3b05fc9bb10d850b3664f1c2b1cb7a7",
+        "c03c8b70c30215b8efe4d25a7b35524fa790f3a22923bde7a518d162719bef71",
     ),
     "params_and_commands": (
-        "5af5e302e1295fd798f6e54b07143b613d732706f76b33a9f8cca87d077ee81b",
-        "d7643c4c9be2fc3cb9126991f33a82ee9164e4847e95114b8b98e3a5ede8dd62",
+        "12f42e068b49d49b96ba12047685d2c4d663c13a39bc287e4bdd35838be39271",
+        "179c4d2e6214254625db2ea54141dd19ea8cfc3e6ad5675d3db9198d3563c399",
     ),
 }
 

@@ -24,26 +24,41 @@ from uavtest.sitl.params import ParamStore
 
 def _leg() -> Goal:
     g = Goal(GoalKind.POSITION, x=0.0, y=50.0, z=-10.0)
-    g.prev = (0.0, 0.0)
+    g.prev = (0.0, 0.0, -10.0)
     return g
 
 
 def test_on_track_the_target_is_the_waypoint() -> None:
-    assert track_target(_leg(), 0.3, 20.0, 0.5) == (0.0, 50.0, False)
+    assert track_target(_leg(), 0.3, 20.0, -10.0, 0.5) == (0.0, 50.0, -10.0, False)
 
 
 def test_offtrack_heads_for_the_closest_point_of_the_line() -> None:
     # run2 of mission1 at t = 14.3 s: 0.53 m beside the line with NAV_ACC_RAD 0.5
-    assert track_target(_leg(), 0.53, 20.0, 0.5) == (0.0, 20.0, True)
+    assert track_target(_leg(), 0.53, 20.0, -10.0, 0.5) == (0.0, 20.0, -10.0, True)
     # with PX4's default NAV_ACC_RAD (2 m) the same drift is on track
-    assert track_target(_leg(), 0.53, 20.0, 2.0) == (0.0, 50.0, False)
+    assert track_target(_leg(), 0.53, 20.0, -10.0, 2.0) == (0.0, 50.0, -10.0, False)
+
+
+def test_offtrack_counts_the_altitude_as_px4_does() -> None:
+    """FlightTaskAuto::_getCurrentState measures the distance to the track in 3-D (Vector3f):
+    0.4 m beside and 0.4 m above a level leg is 0.57 m off it, outside NAV_ACC_RAD 0.5."""
+    assert track_target(_leg(), 0.4, 20.0, -10.0, 0.5)[3] is False
+    assert track_target(_leg(), 0.4, 20.0, -10.4, 0.5) == pytest.approx((0.0, 20.0, -10.0, True))
+    # a climbing leg: the closest point of the 3-D line, at its altitude there
+    climb = Goal(GoalKind.POSITION, x=0.0, y=40.0, z=-30.0)
+    climb.prev = (0.0, 0.0, -10.0)
+    tx, ty, tz, via = track_target(climb, 0.0, 20.0, -10.0, 0.5)
+    assert via
+    assert tx == pytest.approx(0.0)
+    assert (ty, tz) == pytest.approx((16.0, -18.0))  # (0, 20, -10) projected onto the line
 
 
 def test_previous_waypoint_in_front_and_target_behind() -> None:
-    assert track_target(_leg(), 0.0, -3.0, 0.5) == (0.0, 0.0, True)
-    assert track_target(_leg(), 1.0, 52.0, 0.5) == (0.0, 50.0, False)  # passed: straight back to it
-    no_track = Goal(GoalKind.POSITION, x=5.0, y=5.0)
-    assert track_target(no_track, 3.0, -3.0, 0.5) == (5.0, 5.0, False)
+    assert track_target(_leg(), 0.0, -3.0, -10.0, 0.5) == (0.0, 0.0, -10.0, True)
+    # passed: straight back to it
+    assert track_target(_leg(), 1.0, 52.0, -10.0, 0.5) == (0.0, 50.0, -10.0, False)
+    no_track = Goal(GoalKind.POSITION, x=5.0, y=5.0, z=-10.0)
+    assert track_target(no_track, 3.0, -3.0, -10.0, 0.5) == (5.0, 5.0, -10.0, False)
 
 
 def test_corner_speed_through_a_right_angle_and_braking_distance() -> None:

@@ -3,10 +3,11 @@
 import io
 from pathlib import Path
 
+import numpy as np
 import pytest
 from pyulog import ULog
 
-from uavtest.analysis.ulog import flight_window, mission_progress_from_ulog
+from uavtest.analysis.ulog import flight_window, mission_progress_from_ulog, read_ulog
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.main import FileLogSink
 from uavtest.sitl.recorder import MemorySink
@@ -96,3 +97,49 @@ def test_file_sink_renames_part_when_closed(tmp_path: Path, shared_data: Path):
     fly_mission(config, items, sink=sink)
     assert [p.name for p in tmp_path.iterdir()] == ["seed3-1.ulg"]
     ULog(str(tmp_path / "seed3-1.ulg"))  # parses
+
+
+def _triplets(ulog: ULog) -> list[tuple]:
+    """The distinct (previous, current, next) of position_setpoint_triplet while flying legs:
+    validity and latitude (rounded to a centimetre) of each."""
+    d = ulog.get_dataset("position_setpoint_triplet").data
+    seen: list[tuple] = []
+    for i in range(len(d["timestamp"])):
+        if d["current.type"][i] != 0:  # SETPOINT_TYPE_POSITION: a leg
+            continue
+        row = tuple(
+            (bool(d[f"{s}.valid"][i]), round(float(d[f"{s}.lat"][i]), 7) if d[f"{s}.valid"][i] else None)
+            for s in ("previous", "current", "next")
+        )
+        if not seen or seen[-1] != row:
+            seen.append(row)
+    return seen
+
+
+def test_the_triplet_names_the_track_and_the_corner_as_px4_logs_them(flown, shared_data: Path):
+    """PX4's navigator publishes the waypoint just reached as ``previous`` and the one after the
+    target as ``next`` (mission2: out to the waypoint with the landing point next, then back to the
+    landing point from the waypoint); FlightTaskAuto flies the track between them. Analyses that
+    read a PX4 log's legs read ours."""
+    px4 = _triplets(read_ulog(shared_data / "px4-sih" / "competition-mission2-run2.ulg"))
+    ours = _triplets(flown[0])
+    legs = [r for r in ours if r[0][0]]  # with a previous waypoint
+    assert len(legs) >= 2
+    out, back = legs[0], legs[-1]
+    assert out[2][0], "the first leg's triplet carries the corner after it (next)"
+    assert back[0][1] == out[1][1], "the way back starts at the waypoint just reached"
+    # PX4 logged the same structure for the same plan (positions to within a metre: 1e-5 deg)
+    px4_legs = [r for r in px4 if r[0][0]]
+    assert px4_legs[-1][0][1] == pytest.approx(back[0][1], abs=1e-5)
+    assert any(r[2][0] for r in px4_legs)
+
+
+def test_position_control_setpoints_are_logged_like_px4s(flown):
+    """vehicle_local_position_setpoint: PositionControl's acceleration and normalised thrust
+    setpoints (a hover asks for MPC_THR_HOVER upwards, 0.5 in SIH's airframe)."""
+    ulog, _ = flown
+    sp = ulog.get_dataset("vehicle_local_position_setpoint").data
+    assert {"acceleration[0]", "thrust[2]", "vx", "yaw"} <= sp.keys()
+    assert float(np.median(sp["thrust[2]"])) == pytest.approx(-0.5, abs=0.05)
+    tilt = np.hypot(sp["thrust[0]"], sp["thrust[1]"])
+    assert tilt.max() > 0.1, "the legs ask for horizontal thrust"

@@ -338,7 +338,7 @@ class Navigator:
             self._step = _Step(since=now)
             if was_position and not math.isnan(old.x):
                 # position_setpoint_triplet.previous: the item just reached
-                self._step.extra.update(prev_x=old.x, prev_y=old.y)
+                self._step.extra.update(prev_x=old.x, prev_y=old.y, prev_z=old.z)
         else:
             self._finish()
 
@@ -440,7 +440,7 @@ class Navigator:
             else:
                 g = self._goal_set(GoalKind.POSITION, s.x, s.y, s.z)
                 if "prev_x" in s.extra:
-                    g.prev = (s.extra["prev_x"], s.extra["prev_y"])
+                    g.prev = (s.extra["prev_x"], s.extra["prev_y"], s.extra["prev_z"])
                 g.acc_rad = radius
                 # Mission::setActiveMissionItems: a waypoint without a hold time hands its
                 # successor to the triplet's next, so the trajectory turns through the corner
