@@ -88,7 +88,9 @@ def fit(
         lagged = _lag(want, tau, dt)
         for delay in delays:
             k = round(delay / dt)
-            shifted = np.vstack([np.repeat(lagged[:1], k, axis=0), lagged[: len(lagged) - k]]) if k else lagged
+            shifted = lagged
+            if k:
+                shifted = np.vstack([np.repeat(lagged[:1], k, axis=0), lagged[: len(lagged) - k]])
             rms = float(np.sqrt(np.mean((shifted[scored] - got[scored]) ** 2)))
             if best is None or rms < best.rms:
                 best = AttitudeResponse(delay, tau, rms)

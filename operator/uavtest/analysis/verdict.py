@@ -155,6 +155,7 @@ def judge_flight(
     crash: str | None = None,
     expect_flight: bool = False,
     refusal: str | None = None,
+    collision_seen: str | None = None,
 ) -> tuple[FlightMetrics, list[AssertionResult], Verdict, str]:
     """Measure the flight and check each assertion that applies.
 
@@ -165,6 +166,9 @@ def judge_flight(
 
     ``crash``: a crash the log itself reports (``uavtest.analysis.ulog.crash_reported``); it
     counts as a collision even when the logged estimate stops short of the box.
+    ``collision_seen``: where the runner saw the vehicle's reported position inside a box and
+    ended the flight (the log closes at the disarm and may stop short of that position); a
+    collision likewise.
 
     ``mission_expected``: the test has a mission, so ``missionCompleted`` applies even when
     ``mission`` (the progress) is unknown — then it fails saying so. Without an expected mission,
@@ -193,9 +197,9 @@ def judge_flight(
         metrics.collision = bool(d.min() <= 0.0)
         metrics.min_obstacle_distance_2d = competition_distance(trajectory, obstacles)
         metrics.competition_points = competition_points(metrics.min_obstacle_distance_2d)
-    if crash is not None:
+    if crash is not None or collision_seen is not None:
         metrics.collision = True
-    if obstacles and assertions.no_collision and unjudged and crash is None:
+    if obstacles and assertions.no_collision and unjudged and crash is None and collision_seen is None:
         not_judged("noCollision", 0.0)
     elif obstacles and assertions.no_collision:
         hit = metrics.collision
@@ -205,6 +209,8 @@ def judge_flight(
             where = f" at t={trajectory.t[first]:.1f} s"
         elif crash is not None:
             where = f": the log reports '{crash}'"
+        elif collision_seen is not None:
+            where = f": {collision_seen}"
         results.append(
             AssertionResult(
                 name="noCollision",
@@ -338,11 +344,13 @@ def judge(
     crash: str | None = None,
     commands: Sequence[Command] | None = None,
     refusal: str | None = None,
+    collision_seen: str | None = None,
 ) -> tuple[FlightMetrics, list[AssertionResult], Verdict, str]:
     """Metrics, assertion results, verdict (pass / fail) and reason of one flight of ``spec``.
 
     Whether a flight was due is ``flight_intent(spec, commands)``; ``refusal`` is the vehicle's
-    reason when it refused a command (see ``judge_flight``).
+    reason when it refused a command, ``crash`` and ``collision_seen`` collisions the log or the
+    runner reports (see ``judge_flight``).
 
     ``mission``: progress from the log's ``mission_result``; when None and the test has a
     mission, it is worked out from the path (``uavtest.analysis.mission``). ``reference``: the
@@ -363,4 +371,5 @@ def judge(
         crash=crash,
         expect_flight=flight_intent(spec, commands) is not None,
         refusal=refusal,
+        collision_seen=collision_seen,
     )

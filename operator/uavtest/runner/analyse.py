@@ -27,7 +27,7 @@ from uavtest.runner.core import Ending, FlightReport
 from uavtest.runner.plan import flight_commands
 from uavtest.spec.models import UavTestSpec
 
-__all__ = ["Analysis", "analyse", "online_metrics", "vehicle_reason"]
+__all__ = ["Analysis", "analyse", "collision_seen", "online_metrics", "vehicle_reason"]
 
 log = logging.getLogger(__name__)
 
@@ -81,6 +81,19 @@ def online_metrics(report: FlightReport) -> FlightMetrics | None:
         min_obstacle_distance=report.min_distance if math.isfinite(report.min_distance) else None,
         collision=report.collision is not None,
         geofence_violation=report.geofence_violation or None,
+    )
+
+
+def collision_seen(report: FlightReport) -> str | None:
+    """Where the runner ended the flight because the vehicle reported its position inside a box
+    (LOCAL_POSITION_NED), else None. Pure. The vehicle's log closes at the disarm that follows,
+    so it may end a step short of that position; the verdict still counts the collision."""
+    c = report.collision
+    if report.ending is not Ending.COLLISION or c is None:
+        return None
+    return (
+        f"the vehicle reported its position inside it at t={c.time_ms / 1000:.2f} s "
+        f"(LOCAL_POSITION_NED {c.x:.2f}, {c.y:.2f}, {c.z:.2f}) and the runner ended the flight there"
     )
 
 
@@ -165,6 +178,7 @@ def analyse(
         crash=crash_reported(ulog),
         commands=flight_commands(spec),
         refusal=vehicle_reason(report),
+        collision_seen=collision_seen(report),
     )
     if report.ending is Ending.REFUSED and verdict is Verdict.PASS:
         return refused()

@@ -9,6 +9,7 @@ from uavtest.analysis.models import Verdict
 from uavtest.runner.analyse import analyse, vehicle_reason
 from uavtest.runner.commands import Refusal
 from uavtest.runner.core import Ending, FlightReport
+from uavtest.runner.events import LocalPosition
 from uavtest.spec.models import UavTestSpec
 
 # square-mission.ulg: PX4 v1.15 SIH, takeoff to 10 m, 30 m north, 30 m east, land there
@@ -137,3 +138,26 @@ def test_a_blocked_flight_fails_with_the_runners_reason_first(shared_data: Path)
     a = analyse(rep, shared_data / "px4-sih/square-mission.ulg", spec, index=0, seed=0)
     assert a.result.verdict is Verdict.FAIL
     assert a.result.reason == "blocked: no progress toward mission item 2 for 60 s (12.0 m away)"
+
+
+def test_a_collision_the_runner_ended_the_flight_at_fails_even_if_the_log_stops_short(
+    shared_data: Path,
+) -> None:
+    """The runner stops a flight once the vehicle reports its position inside a box; the disarm
+    closes the log, which may end a step before that position. The verdict still counts it: a
+    box 0.3 m beside the square's first leg is never entered by the logged path, but the runner
+    saw the vehicle inside it."""
+    box = {"size": {"l": 4, "w": 1, "h": 20}, "position": {"x": 15, "y": 1.3}}
+    spec = UavTestSpec.model_validate({**SQUARE, "world": {"obstacles": [box]}})
+    clear = analyse(flown(), shared_data / "px4-sih/square-mission.ulg", spec, index=0, seed=0)
+    assert clear.result.metrics is not None and clear.result.metrics.collision is False
+    report = flown()
+    report.ending = Ending.COLLISION
+    report.collision = LocalPosition(time_ms=141_250, x=15.0, y=0.9, z=-10.0)
+    a = analyse(report, shared_data / "px4-sih/square-mission.ulg", spec, index=0, seed=0)
+    assert a.result.verdict is Verdict.FAIL
+    assert a.result.metrics is not None and a.result.metrics.collision is True
+    assert a.result.reason.startswith(
+        "hard fail: collision with an obstacle: the vehicle reported its position inside it at t=141.25 s"
+    ), a.result.reason
+    assert "noCollision" in [r.name for r in a.result.assertions if not r.passed]
