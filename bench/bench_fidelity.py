@@ -48,6 +48,7 @@ from uavtest.analysis.fidelity import (
     FlightFigures,
     arrival_velocity_errors,
     displacement_errors,
+    estimate_errors,
     flight_figures,
     pairs_between,
     pairs_within,
@@ -127,6 +128,8 @@ class Flights:
     vertical_series: list = dataclasses.field(default_factory=list)
     #: per flight, how the tilt follows the thrust setpoint (``analysis.attitude_response``)
     attitude: list[AttitudeResponse] = dataclasses.field(default_factory=list)
+    #: per flight that logs its ground truth: EKF2's position and velocity error std against it
+    truth: list[tuple[float, float]] = dataclasses.field(default_factory=list)
 
 
 def _measure(ulog: ULog, into: Flights) -> None:
@@ -141,6 +144,18 @@ def _measure(ulog: ULog, into: Flights) -> None:
     vertical = displacement_errors(t[air], lp["z"][air], lp["vz"][air])
     if len(vertical):
         into.vertical_series.append(vertical)
+    if any(d.name == "vehicle_local_position_groundtruth" for d in ulog.data_list):
+        gt = ulog.get_dataset("vehicle_local_position_groundtruth").data
+        cols = ("x", "y", "vx", "vy")
+        into.truth.append(
+            estimate_errors(
+                t,
+                np.column_stack([lp[k] for k in cols]),
+                gt["timestamp"] / 1e6,
+                np.column_stack([gt[k] for k in cols]),
+                (traj.t[0], traj.t[-1]),
+            )
+        )
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     att = ulog.get_dataset("vehicle_attitude").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
@@ -214,7 +229,16 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
         t.add_row(f"{label}, {unit}", str(theirs or "—"), str(cross), str(own or "—"), inside)
     ft_px4 = spread([f.flight_time for f in px4])
     ft_ours = spread([f.flight_time for f in ours])
-    t.add_row("flight time, s (PX4 / built-in)", str(ft_px4), str(ft_ours), "", "")
+    # two-sided: a mean flight time outside PX4's range is off either way
+    ft_inside = ft_px4.low <= ft_ours.mean <= ft_px4.high
+    ok &= len(px4) < 2 or ft_inside
+    t.add_row(
+        "flight time, s (PX4 / built-in)",
+        str(ft_px4),
+        str(ft_ours),
+        "",
+        "—" if len(px4) < 2 else ("yes" if ft_inside else "[red]no[/red]"),
+    )
     t.add_row(
         "flight-time spread (max − min), s",
         f"{ft_px4.high - ft_px4.low:.1f}",
@@ -250,6 +274,14 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "",
             "",
         )
+    if px4_all.truth and ours_all.truth:
+        t.add_row(
+            "EKF2 error against the ground truth: position / velocity std, m, m/s",
+            _truth(px4_all.truth),
+            _truth(ours_all.truth),
+            "",
+            "",
+        )
     if px4_all.attitude and ours_all.attitude:
         t.add_row(
             "attitude response (tilt after thrust setpoint): delay + lag, median",
@@ -259,6 +291,12 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "",
         )
     return t, ok
+
+
+def _truth(errors: list[tuple[float, float]]) -> str:
+    pos = statistics.mean(e[0] for e in errors)
+    vel = statistics.mean(e[1] for e in errors)
+    return f"{pos:.2f} / {vel:.2f} ({len(errors)} flights)"
 
 
 def _response(fits: list[AttitudeResponse]) -> str:

@@ -52,6 +52,7 @@ __all__ = [
     "arrival_velocity_errors",
     "compare",
     "displacement_errors",
+    "estimate_errors",
     "flight_figures",
     "from_liftoff",
     "normalised",
@@ -155,6 +156,28 @@ def velocity_errors(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Per horizontal axis, ``displacement_errors``."""
     return displacement_errors(t, x, vx, rate), displacement_errors(t, y, vy, rate)
+
+
+def estimate_errors(
+    t: np.ndarray,
+    estimate: np.ndarray,
+    t_truth: np.ndarray,
+    truth: np.ndarray,
+    window: tuple[float, float],
+    rate: float = 10.0,
+) -> tuple[float, float]:
+    """How far the estimate is from the ground truth a simulator logs next to it (PX4 SITL's
+    ``vehicle_local_position_groundtruth``): the standard deviation per horizontal axis of the
+    position error (about its mean: the EKF origin is not the simulator's) and of the velocity
+    error, averaged over x and y. ``estimate`` and ``truth``: (N, 4) columns x, y, vx, vy."""
+    g = np.arange(window[0], window[1], 1.0 / rate)
+    if len(g) < 2:
+        raise BadInput("estimate errors: the window is empty")
+    err = np.column_stack(
+        [np.interp(g, t, estimate[:, i]) - np.interp(g, t_truth, truth[:, i]) for i in range(4)]
+    )
+    std = err.std(axis=0)
+    return float((std[0] + std[1]) / 2), float((std[2] + std[3]) / 2)
 
 
 def pooled_autocorrelation(series: Sequence[np.ndarray], lag: int) -> float:

@@ -43,11 +43,13 @@ __all__ = [
     "PositionSetpointTriplet",
     "TrajectorySetpoint",
     "VehicleAttitude",
+    "VehicleAttitudeGroundtruth",
     "VehicleCommand",
     "VehicleCommandAck",
     "VehicleGlobalPosition",
     "VehicleLandDetected",
     "VehicleLocalPosition",
+    "VehicleLocalPositionGroundtruth",
     "VehicleLocalPositionSetpoint",
     "VehicleStatus",
     "command",
@@ -198,6 +200,18 @@ class VehicleAttitude:
     q: tuple[float, float, float, float] = ulog("float[4]")
     delta_q_reset: tuple[float, float, float, float] = ulog("float[4]")
     quat_reset_counter: int = ulog("uint8_t")
+
+
+@topic("vehicle_attitude_groundtruth")
+@dataclass(slots=True)
+class VehicleAttitudeGroundtruth(VehicleAttitude):
+    """The simulated body's true attitude, as PX4 SITL logs it next to the estimate."""
+
+
+@topic("vehicle_local_position_groundtruth")
+@dataclass(slots=True)
+class VehicleLocalPositionGroundtruth(VehicleLocalPosition):
+    """The simulated body's true position and velocity, as PX4 SITL logs them next to the estimate."""
 
 
 @topic("vehicle_status")
@@ -554,12 +568,14 @@ def local_position(
     ref_t_us: int,
     valid: bool,
     dist_bottom: float | None = None,
+    cls: type[VehicleLocalPosition] = VehicleLocalPosition,
 ) -> VehicleLocalPosition:
-    """``dist_bottom``: the range finder's distance to the ground (default: the altitude)."""
+    """``dist_bottom``: the range finder's distance to the ground (default: the altitude);
+    ``cls``: ``VehicleLocalPositionGroundtruth`` for the truth."""
     x, y, z = pos
     vx, vy, vz = vel
     bottom = max(-z, 0.0) if dist_bottom is None else max(dist_bottom, 0.0)
-    return VehicleLocalPosition(
+    return cls(
         t_us, t_us, x, y, z, vx, vy, vz, vz, acc[0], acc[1], acc[2], heading, 0.0, bottom,
         0.3, 0.4, 0.1, 0.1, ref[0], ref[1], ref[2], ref_t_us, NAN, NAN, NAN, NAN,
         valid, valid, valid, valid, valid, valid, True, valid, False,

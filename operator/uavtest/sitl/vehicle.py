@@ -767,7 +767,25 @@ class Vehicle:
             roll, pitch = b.tilt()
             q = topics.quaternion(roll, pitch, st.yaw)
             rec.data(topics.VehicleAttitude(t, t, q, (0.0, 0.0, 0.0, 0.0), 0))
+            # the truth next to the estimate, as PX4 SITL logs it (SIH's *_groundtruth topics)
+            qt = topics.quaternion(roll, pitch, b.yaw)
+            rec.data(topics.VehicleAttitudeGroundtruth(t, t, qt, (0.0, 0.0, 0.0, 0.0), 0))
         if tick % (CONTROL_EVERY * 5) == 0:  # 10 Hz
+            home = (self.config.home.lat, self.config.home.lon, self.home_alt)
+            rec.data(
+                topics.local_position(
+                    t,
+                    (b.x, b.y, b.z),
+                    (b.vx, b.vy, b.vz),
+                    (b.ax, b.ay, b.az),
+                    b.yaw,
+                    home,
+                    0,
+                    True,
+                    -b.z,
+                    topics.VehicleLocalPositionGroundtruth,
+                )
+            )
             lat, lon = self.proj.reproject(st.x, st.y)
             alt = self.home_alt - st.z
             if not self.sim.faulty or self._global_valid(t):  # EKF2 publishes none without one

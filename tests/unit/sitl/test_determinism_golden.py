@@ -208,26 +208,27 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: and for EKF2's heading error calibrated on PX4 SIH's ground truth (2.4 +- 2.6 degrees per flight,
 #: 2.2 within), leaning the real thrust against it; and for PX4 SIH's attitude response (the tilt
 #: 0.10 s after the thrust setpoint, then a 0.06 s lag, as all nine SIH logs show), FlightTaskAuto's
-#: offtrack state in 3-D, the triplet's previous and next and vehicle_local_position_setpoint logged.
+#: offtrack state in 3-D, the triplet's previous and next, vehicle_local_position_setpoint and the
+#: ground truth (vehicle_local_position_groundtruth, vehicle_attitude_groundtruth) logged.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "ee1e485405502f798510af14a9ff723a60cff020dad607c6c306ca0af2fc0bdc",
+        "f09b9daaa19d678f695d01eb3f4bad8d915f73e9d5d914c44b256f34734ca113",
         "94d20f769f513ef187337d1866f0c014bc8c7251e4521b441acd79d172b1a69c",
     ),
     "manual_and_rtl": (
-        "5b459e4cf78a698ff5e096a9071152e0f31d3faea8d2e80e905a4f209a9b3ece",
+        "beeee0c0a14f62741e36ec28b996d5fb3344e19077c009ca89241f13e11bf841",
         "c8d0dd90f0d3c3a5db3e189053f21a5ba8f77d3fbb6a768c478b6685756b01e6",
     ),
     "datalink_loss": (
-        "97880e39d53ca6d7512fe198af8ad4d204c6120ece871627e94bd08cf88edae7",
+        "a00c24b5c0e2e44993ca123c083dade5b331c4af41bd3b4cd23103c504c8460a",
         "72bc4e13ad8468663b9e81cdb0eadbf7e98d7d8bcb2c9f489f777ca360207e69",
     ),
     "crash": (
-        "f9db1cd82dcb7f79b143479ea4e82ffbd3b05fc9bb10d850b3664f1c2b1cb7a7",
+        "0d905f1a251a79f7684874245e3da46fac08b65c02ee0623982179ef217e5825",
         "c03c8b70c30215b8efe4d25a7b35524fa790f3a22923bde7a518d162719bef71",
     ),
     "params_and_commands": (
-        "12f42e068b49d49b96ba12047685d2c4d663c13a39bc287e4bdd35838be39271",
+        "356d5db672da555f4ead73a657f0a3841ef2c6bf1eac582002d2f0183a7fea80",
         "179c4d2e6214254625db2ea54141dd19ea8cfc3e6ad5675d3db9198d3563c399",
     ),
 }

@@ -143,3 +143,23 @@ def test_position_control_setpoints_are_logged_like_px4s(flown):
     assert float(np.median(sp["thrust[2]"])) == pytest.approx(-0.5, abs=0.05)
     tilt = np.hypot(sp["thrust[0]"], sp["thrust[1]"])
     assert tilt.max() > 0.1, "the legs ask for horizontal thrust"
+
+
+def test_the_truth_is_logged_next_to_the_estimate_as_px4_sitl_does(flown):
+    """vehicle_local_position_groundtruth and vehicle_attitude_groundtruth, as PX4 SITL logs
+    them: the estimate differs from the truth by EKF2-like errors (decimetres, a few degrees of
+    heading), so a user can tell what the vehicle believed from where it was."""
+    ulog, _ = flown
+    lp = ulog.get_dataset("vehicle_local_position").data
+    gt = ulog.get_dataset("vehicle_local_position_groundtruth").data
+    assert gt.keys() == lp.keys()
+    t = gt["timestamp"]
+    err = np.hypot(
+        np.interp(t, lp["timestamp"], lp["x"]) - gt["x"], np.interp(t, lp["timestamp"], lp["y"]) - gt["y"]
+    )
+    assert 0.01 < float(np.median(err)) < 0.5
+    assert float(gt["z"].min()) < -9.0
+    est = ulog.get_dataset("vehicle_attitude").data
+    truth = ulog.get_dataset("vehicle_attitude_groundtruth").data
+    assert len(truth["q[0]"]) == len(est["q[0]"])
+    assert not np.allclose(truth["q[3]"], est["q[3]"]), "EKF2's heading error shows in the estimate"
