@@ -9,6 +9,7 @@ and the client runs as a subprocess with that folder first on ``PYTHONPATH``.
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -70,6 +71,9 @@ def test_mavsdk3_connects_uploads_arms_flies_a_mission_and_lands(mavsdk3_path: P
     assert abs(lat - 47.397742) < 1e-4 and abs(lon - 8.545594) < 1e-4
     assert seen["alt_at_end_of_mission"] > 6.0, "the mission flew at 8 m"
     end_lat, end_lon = seen["end"]
-    assert abs(end_lat - (lat + 0.0002)) < 3e-5 and abs(end_lon - (lon + 0.0003)) < 4e-5, (
-        "landed at the last item"
-    )
+    # the client lands as soon as the mission reports its last item, reached within NAV_ACC_RAD
+    # (2 m) while still moving: PX4 v1.15 SIH, driven by this same client, landed 2.6-3.1 m short
+    # of the item (three runs); the built-in vehicle 3.2 m. The first waypoint is 22 m away.
+    north = (end_lat - (lat + 0.0002)) * 111_320
+    east = (end_lon - (lon + 0.0003)) * 111_320 * math.cos(math.radians(lat))
+    assert math.hypot(north, east) < 4.0, f"landed {math.hypot(north, east):.1f} m from the last item"
