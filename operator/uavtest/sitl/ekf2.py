@@ -120,6 +120,12 @@ class Estimator:
         self.evx, self.evy = self._cvx + self.bx, self._cvy + self.by
         self.evz = self._cvz + self.bz
 
+    @property
+    def z_deriv_error(self) -> float:
+        """The error of the estimated altitude's derivative (``z_deriv``): the integrated part of
+        the vertical velocity error, without the bias the altitude does not follow."""
+        return self._cvz
+
     def update(self, dt: float) -> None:
         """Advance ``dt`` seconds."""
         av = math.exp(-dt / TAU_V)

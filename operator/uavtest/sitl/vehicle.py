@@ -173,7 +173,7 @@ class Vehicle:
         land_jitter = variation.uniform(0.35, 0.75)  # touchdown to PX4's ground-contact conditions, s
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
-        self.land = LandDetector(self.params, self.ctrl, land_jitter)
+        self.land = LandDetector(self.params, self.ctrl, land_jitter, self.est)
         self.nav = Navigator(self.params, self.proj, self.home_alt, random.Random(f"{seed}:navigator"))
         if planner:  # PX4-Avoidance's local planner flies the auto modes' waypoints (COM_OBS_AVOID 1)
             camera = DepthCamera(self.world, random.Random(f"{seed}:depth"))

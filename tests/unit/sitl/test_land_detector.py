@@ -127,3 +127,21 @@ def test_no_landing_is_detected_in_the_air_and_it_follows_touchdown_by_px4s_hyst
     v.fly_until(lambda v: v.landed, 10_000_000)
     # three steps of LNDMC_TRIG_TIME / 3 after the thrust has fallen (0.35-0.75 s after touchdown)
     assert 1.3 <= (v.landed_at_us - touchdown) / 1e6 <= 1.8
+
+
+def test_no_landing_while_the_estimate_still_moves():
+    """MulticopterLandDetector judges vertical movement on EKF2's estimate: a vehicle resting on
+    the ground whose estimate still climbs at 0.3 m/s (LNDMC_Z_VEL_MAX 0.25) is not landed; it is
+    once the estimate settles. PX4 v1.15 SIH shows this after hard touchdowns (up to 9.7 s)."""
+    v = _landing_from_3m(25)
+    v.fly_until(lambda v: v.body.on_ground, 60_000_000)
+    assert not v.landed
+    e = v.est
+    touchdown = v.time_us
+    held_until = touchdown + 5_000_000
+    while v.time_us < held_until:  # EKF2 believes the vehicle climbs: climb rate and altitude
+        e._cvz, e.bz = -0.3, 0.0
+        v.advance(v.time_us + 20_000)
+        assert not v.landed, f"landed {(v.time_us - touchdown) / 1e6:.1f} s after touchdown while moving"
+    v.fly_until(lambda v: v.landed, 10_000_000)
+    assert v.landed and v.landed_at_us - held_until < 3_000_000
