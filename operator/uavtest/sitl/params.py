@@ -127,6 +127,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     # land detector
     "LNDMC_TRIG_TIME": (FLOAT, 1.0),
     "LNDMC_Z_VEL_MAX": (FLOAT, 0.25),
+    "LNDMC_XY_VEL_MAX": (FLOAT, 1.5),
 }
 
 
@@ -143,7 +144,6 @@ UNMODELLED_AT_BOOT: tuple[str, ...] = (
     "MPC_TILTMAX_LND",
     "MPC_ALT_MODE",
     "MC_YAWRATE_MAX",
-    "LNDMC_XY_VEL_MAX",
     "MAV_SYS_ID",
     "MAV_COMP_ID",
     "MAV_TYPE",
