@@ -209,27 +209,28 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: 2.2 within), leaning the real thrust against it; and for PX4 SIH's attitude response (the tilt
 #: 0.10 s after the thrust setpoint, then a 0.06 s lag, as all nine SIH logs show), FlightTaskAuto's
 #: offtrack state in 3-D, the triplet's previous and next, vehicle_local_position_setpoint and the
-#: ground truth (vehicle_local_position_groundtruth, vehicle_attitude_groundtruth) logged.
+#: ground truth (vehicle_local_position_groundtruth, vehicle_attitude_groundtruth) logged, and
+#: LNDMC_XY_VEL_MAX modelled (the land detector judges movement on the estimate).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "f09b9daaa19d678f695d01eb3f4bad8d915f73e9d5d914c44b256f34734ca113",
+        "12b1fc7f6e2394c917daa8f37e2abc4b6e2137f36370fda558c34317d68b0e69",
         "94d20f769f513ef187337d1866f0c014bc8c7251e4521b441acd79d172b1a69c",
     ),
     "manual_and_rtl": (
-        "beeee0c0a14f62741e36ec28b996d5fb3344e19077c009ca89241f13e11bf841",
+        "68353ca4f653a636c9d59143d13c24716b76faaeaa5b653972ec4f7cd4a2741c",
         "c8d0dd90f0d3c3a5db3e189053f21a5ba8f77d3fbb6a768c478b6685756b01e6",
     ),
     "datalink_loss": (
-        "a00c24b5c0e2e44993ca123c083dade5b331c4af41bd3b4cd23103c504c8460a",
+        "8c2ce57ff645fb5e52a88a8dd9e072713f905c0105530ef61c4d8af3cb0e6b6f",
         "72bc4e13ad8468663b9e81cdb0eadbf7e98d7d8bcb2c9f489f777ca360207e69",
     ),
     "crash": (
-        "0d905f1a251a79f7684874245e3da46fac08b65c02ee0623982179ef217e5825",
+        "77bc5841188b60638fb4a6b184231b572c0e92bb770fcabc95c2410d7add99bc",
         "c03c8b70c30215b8efe4d25a7b35524fa790f3a22923bde7a518d162719bef71",
     ),
     "params_and_commands": (
-        "356d5db672da555f4ead73a657f0a3841ef2c6bf1eac582002d2f0183a7fea80",
-        "179c4d2e6214254625db2ea54141dd19ea8cfc3e6ad5675d3db9198d3563c399",
+        "ef1d2c2a0817946733f75444121e3075cc7f5147a90675e23230c117af72334f",
+        "91b70b0bbf3216b24856f9c37fd654ed67706ba182bf97d29b2716c09cd33c3c",
     ),
 }
 
