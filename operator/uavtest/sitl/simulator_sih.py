@@ -22,8 +22,9 @@ __all__ = ["GRAVITY", "Body", "Box", "WindModel", "World"]
 GRAVITY = 9.80665
 #: PX4 SIH's attitude response: in all nine shared SIH logs the body's tilt (vehicle_attitude)
 #: follows the direction of the thrust setpoint (vehicle_local_position_setpoint.thrust) after a
-#: 0.09 s delay and a 0.06 s first-order lag (best fit, 0.007-0.009 rms of the tilt's sine): PX4's
-#: attitude and rate controllers, control allocation and SIH's motors between them
+#: 0.09-0.10 s delay and a 0.06 s first-order lag (best fit, ~0.01 rms of the tilt's sine): PX4's
+#: attitude and rate controllers, control allocation and SIH's motors between them. With 0.10 s
+#: the built-in vehicle's own log fits as PX4's does (``uavtest.analysis.attitude_response``)
 ATTITUDE_DELAY = 0.10  # s
 TAU_TILT = 0.06  # s
 #: the competition's system under test (PX4 in Gazebo, iris; the local planner's calibration):
