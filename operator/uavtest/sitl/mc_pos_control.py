@@ -186,8 +186,6 @@ def track_target(
     px, py, pz = goal.prev
     if px != px:
         return goal.x, goal.y, goal.z, False
-    if pz != pz:
-        pz = goal.z
     ux, uy, uz = goal.x - px, goal.y - py, goal.z - pz
     length = math.sqrt(ux * ux + uy * uy + uz * uz)
     if length < 1e-6:

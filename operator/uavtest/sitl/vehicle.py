@@ -86,7 +86,6 @@ _SETPOINT_TYPE = {
     GoalKind.LAND: topics.SETPOINT_TYPE_LAND,
     GoalKind.IDLE: topics.SETPOINT_TYPE_IDLE,
 }
-_POSITION_SP = topics.SETPOINT_TYPE_POSITION
 #: manual nav state → the flight task's goal kind (attitude for the others)
 _MANUAL_GOAL = {NavState.POSCTL: GoalKind.VELOCITY, NavState.ALTCTL: GoalKind.ALTITUDE}
 _DESCEND = NavState.DESCEND
@@ -750,6 +749,7 @@ class Vehicle:
             return
         tick = self._tick
         b, e, st = self.body, self.est, self.st
+        ref = (self.config.home.lat, self.config.home.lon, self.home_alt)
         rec.data(
             topics.local_position(
                 t,
@@ -757,7 +757,7 @@ class Vehicle:
                 (b.vx + e.evx, b.vy + e.evy, b.vz + e.evz),
                 (b.ax, b.ay, b.az + 0.0),
                 st.yaw,
-                (self.config.home.lat, self.config.home.lon, self.home_alt),
+                ref,
                 0,
                 True,
                 -b.z,  # SIH's downward range finder: the true height
@@ -771,7 +771,6 @@ class Vehicle:
             qt = topics.quaternion(roll, pitch, b.yaw)
             rec.data(topics.VehicleAttitudeGroundtruth(t, t, qt, (0.0, 0.0, 0.0, 0.0), 0))
         if tick % (CONTROL_EVERY * 5) == 0:  # 10 Hz
-            home = (self.config.home.lat, self.config.home.lon, self.home_alt)
             rec.data(
                 topics.local_position(
                     t,
@@ -779,7 +778,7 @@ class Vehicle:
                     (b.vx, b.vy, b.vz),
                     (b.ax, b.ay, b.az),
                     b.yaw,
-                    home,
+                    ref,
                     0,
                     True,
                     -b.z,
@@ -847,10 +846,10 @@ class Vehicle:
         prev = nxt = topics.INVALID_SETPOINT
         if g.kind is GoalKind.POSITION and g.prev[0] == g.prev[0]:
             plat, plon = self.proj.reproject(g.prev[0], g.prev[1])
-            pz = g.prev[2] if g.prev[2] == g.prev[2] else g.z
-            prev = topics.setpoint(t, plat, plon, self.home_alt - pz, math.nan, _POSITION_SP, acc, speed)
+            palt = self.home_alt - g.prev[2]
+            prev = topics.setpoint(t, plat, plon, palt, math.nan, topics.SETPOINT_TYPE_POSITION, acc, speed)
         if g.kind is GoalKind.POSITION and g.next[0] == g.next[0]:
             nlat, nlon = self.proj.reproject(g.next[0], g.next[1])
             nalt = self.home_alt - g.next[2]
-            nxt = topics.setpoint(t, nlat, nlon, nalt, math.nan, _POSITION_SP, acc, speed)
+            nxt = topics.setpoint(t, nlat, nlon, nalt, math.nan, topics.SETPOINT_TYPE_POSITION, acc, speed)
         self.recorder.data(topics.PositionSetpointTriplet(t, prev, cur, nxt))
