@@ -6,7 +6,7 @@ import math
 from pathlib import Path
 
 from uavtest.analysis.models import Verdict
-from uavtest.runner.analyse import analyse, vehicle_reason
+from uavtest.runner.analyse import analyse, collision_seen, vehicle_reason
 from uavtest.runner.commands import Refusal
 from uavtest.runner.core import Ending, FlightReport
 from uavtest.runner.events import LocalPosition
@@ -161,3 +161,18 @@ def test_a_collision_the_runner_ended_the_flight_at_fails_even_if_the_log_stops_
         "hard fail: collision with an obstacle: the vehicle reported its position inside it at t=141.25 s"
     ), a.result.reason
     assert "noCollision" in [r.name for r in a.result.assertions if not r.passed]
+
+
+def test_a_position_inside_a_box_counts_only_when_the_runner_ended_the_flight_on_it() -> None:
+    """``collision_seen`` is the runner's own ending: a flight that landed (or timed out, or was
+    blocked) is judged from its log alone, whatever position the report holds."""
+    inside = LocalPosition(time_ms=20_000, x=19.5, y=0.0, z=-10.0)
+    for ending in (Ending.LANDED, Ending.TIMEOUT, Ending.BLOCKED, Ending.ERROR):
+        report = flown()
+        report.ending, report.collision = ending, inside
+        assert collision_seen(report) is None, ending
+    report = flown()
+    report.ending = Ending.COLLISION
+    assert collision_seen(report) is None, "no position: nothing to report"
+    report.collision = inside
+    assert collision_seen(report) is not None

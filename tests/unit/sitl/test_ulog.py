@@ -128,6 +128,10 @@ def test_the_triplet_names_the_track_and_the_corner_as_px4_logs_them(flown, shar
     out, back = legs[0], legs[-1]
     assert out[2][0], "the first leg's triplet carries the corner after it (next)"
     assert back[0][1] == out[1][1], "the way back starts at the waypoint just reached"
+    # the takeoff has no track: no previous waypoint, as in PX4's log
+    d = flown[0].get_dataset("position_setpoint_triplet").data
+    takeoff = d["current.type"] == 3  # SETPOINT_TYPE_TAKEOFF
+    assert takeoff.any() and not d["previous.valid"][takeoff].any()
     # PX4 logged the same structure for the same plan (positions to within a metre: 1e-5 deg)
     px4_legs = [r for r in px4 if r[0][0]]
     assert px4_legs[-1][0][1] == pytest.approx(back[0][1], abs=1e-5)
