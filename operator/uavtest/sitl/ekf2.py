@@ -44,6 +44,18 @@ from its own random stream so that a seed's horizontal errors are unchanged by i
 the slow drift of EKF2's GPS-referenced altitude (``square-mission.ulg``: 0.2-0.4 m against the
 ground truth over tens of seconds; PX4 lands with its estimate -1.0 to +0.7 m off its lift-off
 altitude); ``SIGMA_Z`` stays small.
+
+At touchdown the estimate moves on its own. SIH's downward range finder reads 0 on the ground,
+below its minimum, so EKF2 stops fusing it until the land detector says landed (then EKF2 fakes
+an on-ground reading and fuses again). In between, the height follows the barometer/GNSS
+reference, which the range-aided flight had let drift: 16 PX4 v1.15 SIH flights flown here, with
+their ground truth, show the estimated altitude shifting by -1.31 to +1.57 m (mean -0.28, standard
+deviation 0.69; negative: the estimate climbs) within about 4 s of touchdown, at up to 0.3-0.5 m/s,
+while the vehicle sits still. Modelled as a per-flight shift ``ground_shift`` (its own random
+stream) spread as a half sine over ``GROUND_SHIFT_TIME``; ``range_lost`` starts it,
+``range_fused`` ends the outage. The terrain estimate freezes at the loss (``hagl``) and is
+invalid ``TERRAIN_TIMEOUT_S`` after the last fusion (``Ekf::isTerrainEstimateValid``): what the
+land detector needs (``land_detector.py``).
 """
 
 from __future__ import annotations
@@ -62,6 +74,10 @@ TAU_HEADING = 5.0  # s: the heading error's correlation time on a leg
 SIGMA_HEADING = math.radians(2.2)  # rad: its spread within a flight, on straight legs
 HEADING_OFFSET_MEAN = math.radians(2.4)  # rad: its per-flight offset (PX4 SIH: mostly positive)
 HEADING_OFFSET_SPREAD = math.radians(2.6)  # rad
+GROUND_SHIFT_MEAN = -0.28  # m: the estimate's shift after touchdown (PX4 SIH, 16 flights)
+GROUND_SHIFT_SPREAD = 0.69  # m
+GROUND_SHIFT_TIME = 4.0  # s: the shift's half sine
+TERRAIN_TIMEOUT_S = 5.0  # s: Ekf::isTerrainEstimateValid, range fused within the last 5 s
 TAU_BIAS = 4.0  # s: velocity bias correlation time
 SIGMA_BIAS = 0.22  # m/s: per axis
 #: stationary standard deviation of x for x' = -x / TAU + v, v Gauss-Markov(sigma_v, TAU_V):
@@ -82,8 +98,12 @@ class Estimator:
         "_cvx",
         "_cvy",
         "_cvz",
+        "_ez_loss",
+        "_ezl",
+        "_lost_s",
         "_rng",
         "_rng_z",
+        "_shift_s",
         "_sv",
         "bx",
         "by",
@@ -96,10 +116,17 @@ class Estimator:
         "ex",
         "ey",
         "ez",
+        "ground_shift",
+        "vz_shift",
+        "z_shift",
     )
 
     def __init__(
-        self, rng: random.Random, rng_z: random.Random | None = None, rng_heading: random.Random | None = None
+        self,
+        rng: random.Random,
+        rng_z: random.Random | None = None,
+        rng_heading: random.Random | None = None,
+        rng_ground: random.Random | None = None,
     ) -> None:
         self._rng = rng
         #: the vertical bias draws from its own stream: the horizontal errors of a seed stay
@@ -119,12 +146,52 @@ class Estimator:
         self.bz = self._rng_z.gauss(0, SIGMA_BIAS_Z)
         self.evx, self.evy = self._cvx + self.bx, self._cvy + self.by
         self.evz = self._cvz + self.bz
+        self._ezl = self.ez  # the leaky part of ez; ez adds the shift after touchdown
+        #: the altitude shift after touchdown, from its own stream (the other errors of a seed
+        #: stay what they were before it was calibrated)
+        self.ground_shift = (rng_ground or random.Random(0)).gauss(GROUND_SHIFT_MEAN, GROUND_SHIFT_SPREAD)
+        self.z_shift = self.vz_shift = 0.0
+        self._lost_s = -1.0  # seconds since the range finder was last fused; < 0: fused now
+        # seconds into the shift; < 0: pending (flown above 1 m); it is not started on the ground
+        # before a flight, where the takeoff ramp also reads the range finder below its minimum
+        self._shift_s = GROUND_SHIFT_TIME
+        self._ez_loss = 0.0
 
     @property
     def z_deriv_error(self) -> float:
         """The error of the estimated altitude's derivative (``z_deriv``): the integrated part of
         the vertical velocity error, without the bias the altitude does not follow."""
-        return self._cvz
+        return self._cvz + self.vz_shift
+
+    def range_lost(self) -> None:
+        """The range finder reads below its minimum (on the ground, not yet landed): not fused."""
+        if self._lost_s < 0.0:
+            self._lost_s = 0.0
+            self._ez_loss = self.ez
+        if self._shift_s < 0.0:  # once per touchdown: a bounce does not restart it
+            self._shift_s = 0.0
+
+    def range_fused(self, height: float, landed: bool) -> None:
+        """The range finder is fused: in the air (``height`` above the ground), or EKF2's
+        on-ground reading once ``landed`` (the shift then stops where it is)."""
+        self._lost_s = -1.0
+        self.vz_shift = 0.0
+        if height > 1.0:
+            self._shift_s = -1.0  # airborne again: the next touchdown shifts anew
+        elif landed and self._shift_s >= 0.0:
+            self._shift_s = GROUND_SHIFT_TIME
+
+    @property
+    def terrain_valid(self) -> bool:
+        """EKF2's terrain estimate, so ``dist_bottom``, is valid: the range fused within 5 s."""
+        return self._lost_s < TERRAIN_TIMEOUT_S
+
+    def hagl(self, height_at_loss: float) -> float:
+        """The estimated distance to the ground: the terrain estimate froze when the range finder
+        was lost (``height_at_loss`` above the ground then), the estimated altitude moved on."""
+        if self._lost_s < 0.0:
+            return height_at_loss
+        return height_at_loss + self._ez_loss - self.ez
 
     def update(self, dt: float) -> None:
         """Advance ``dt`` seconds."""
@@ -138,7 +205,18 @@ class Estimator:
         self._cvz = av * self._cvz + bv * sz * g(0.0, 1.0)
         self.ex = leak * self.ex + self._cvx * dt
         self.ey = leak * self.ey + self._cvy * dt
-        self.ez = leak * self.ez + self._cvz * dt
+        self._ezl = leak * self._ezl + self._cvz * dt
+        if self._lost_s >= 0.0:
+            self._lost_s += dt
+            t = self._shift_s
+            if 0.0 <= t < GROUND_SHIFT_TIME:
+                w = math.pi / GROUND_SHIFT_TIME
+                self.vz_shift = self.ground_shift * 0.5 * w * math.sin(w * t)
+                self.z_shift += self.vz_shift * dt
+                self._shift_s = t + dt
+            else:
+                self.vz_shift = 0.0
+        self.ez = self._ezl + self.z_shift
         ab = math.exp(-dt / TAU_BIAS)
         bb = math.sqrt(1 - ab * ab) * SIGMA_BIAS
         self.bx = ab * self.bx + bb * g(0.0, 1.0)
@@ -146,7 +224,7 @@ class Estimator:
         self.evx = self._cvx + self.bx
         self.evy = self._cvy + self.by
         self.bz = ab * self.bz + bb * (SIGMA_BIAS_Z / SIGMA_BIAS) * self._rng_z.gauss(0.0, 1.0)
-        self.evz = self._cvz + self.bz
+        self.evz = self._cvz + self.bz + self.vz_shift
         ah = math.exp(-dt / TAU_HEADING)
         self._ch = ah * self._ch + math.sqrt(1 - ah * ah) * SIGMA_HEADING * g(0.0, 1.0)
         self.eh = self._ch + self.eh_offset

@@ -19,6 +19,15 @@ does: the estimated climb rate (or, failing that, the estimated altitude's deriv
 ``LNDMC_XY_VEL_MAX``. While EKF2 believes the vehicle still moves, the chain starts over: 16 PX4
 v1.15 SIH flights of the competition missions flown here took 1.5-9.7 s from touchdown to landed,
 6 of them 4.3-9.7 s while the estimate climbed at 0.25-0.36 m/s on the ground.
+
+Why it climbs, and why then 8.2 s (``ekf2.py``): on the ground SIH's range finder reads below
+its minimum, so EKF2 stops fusing it and the height follows the barometer/GNSS reference; the
+frozen terrain estimate makes the estimated distance to the ground grow with that climb. Ground
+contact needs that distance under 1 m while it is valid (``_is_close_to_ground``,
+DIST_FROM_GROUND_THRESHOLD); 5 s after the last fusion it is invalid, the check is skipped and,
+the range finder being observable, every stage takes ``LNDMC_TRIG_TIME`` instead of a third of
+it (``LandDetector::_set_hysteresis_factor(3)``): 5 PX4 SIH flights of 16 landed exactly so,
+8.2-9.5 s after touchdown, with ground_contact 2.0 s and maybe_landed 1.0 s before landed.
 """
 
 from __future__ import annotations
@@ -35,6 +44,8 @@ from uavtest.sitl.uorb import VehicleLandDetected
 __all__ = ["TAKEOFF_DETECT_S", "LandDetector", "Transition"]
 
 TAKEOFF_DETECT_S = 0.8  # into the takeoff ramp, PX4's land detector reports the takeoff
+DIST_FROM_GROUND_THRESHOLD = 1.0  # m: MulticopterLandDetector's "close to ground"
+RNG_ON_GROUND = 0.1  # m: EKF2's distance to the ground at touchdown (EKF2_MIN_RNG; PX4 SIH 0.07-0.2)
 
 
 class Transition(Enum):
@@ -66,13 +77,17 @@ class LandDetector:
                     self.takeoff_us = t
                     self._ground_since = None
                     return Transition.TAKEOFF
-            elif b.on_ground and self.descent_commanded(goal) and not self.moving(b):
+            elif (
+                b.on_ground and self.descent_commanded(goal) and not self.moving(b) and self.close_to_ground()
+            ):
                 if self._ground_since is None:
                     self._ground_since = t
                 on = (t - self._ground_since) / 1e6 - self.jitter
-                step = self.params["LNDMC_TRIG_TIME"] / 3.0
-                self.ground_contact = on >= step
-                self.maybe_landed = on >= 2.0 * step
+                # the range finder is observable (SIH has one): with its terrain estimate
+                # invalid, each stage takes LNDMC_TRIG_TIME, else a third of it
+                step = self.params["LNDMC_TRIG_TIME"] / (1.0 if not self.est.terrain_valid else 3.0)
+                self.ground_contact = self.ground_contact or on >= step
+                self.maybe_landed = self.maybe_landed or on >= 2.0 * step
                 if on >= 3.0 * step:
                     self.landed = True
                     self.landed_at_us = t
@@ -99,6 +114,12 @@ class LandDetector:
         vertical = abs(b.vz + e.evz) >= limit and abs(b.vz + e.z_deriv_error) >= limit
         horizontal = math.hypot(b.vx + e.evx, b.vy + e.evy) > self.params["LNDMC_XY_VEL_MAX"]
         return vertical or horizontal
+
+    def close_to_ground(self) -> bool:
+        """``_close_to_ground_or_skipped_check``: EKF2's distance to the ground under 1 m, or
+        skipped while its terrain estimate is invalid."""
+        e = self.est
+        return not e.terrain_valid or e.hagl(RNG_ON_GROUND) < DIST_FROM_GROUND_THRESHOLD
 
     def descent_commanded(self, goal: GoalKind) -> bool:
         """PX4's land detector: under climb-rate control, ground contact needs a commanded descent.

@@ -568,17 +568,20 @@ def local_position(
     ref_t_us: int,
     valid: bool,
     dist_bottom: float | None = None,
+    dist_bottom_valid: bool = True,
+    z_deriv: float | None = None,
     cls: type[VehicleLocalPosition] = VehicleLocalPosition,
 ) -> VehicleLocalPosition:
-    """``dist_bottom``: the range finder's distance to the ground (default: the altitude);
+    """``dist_bottom``: the distance to the ground (default: the altitude) and whether EKF2's
+    terrain estimate is valid; ``z_deriv``: the altitude's derivative (default: ``vz``);
     ``cls``: ``VehicleLocalPositionGroundtruth`` for the truth."""
     x, y, z = pos
     vx, vy, vz = vel
     bottom = max(-z, 0.0) if dist_bottom is None else max(dist_bottom, 0.0)
     return cls(
-        t_us, t_us, x, y, z, vx, vy, vz, vz, acc[0], acc[1], acc[2], heading, 0.0, bottom,
-        0.3, 0.4, 0.1, 0.1, ref[0], ref[1], ref[2], ref_t_us, NAN, NAN, NAN, NAN,
-        valid, valid, valid, valid, valid, valid, True, valid, False,
+        t_us, t_us, x, y, z, vx, vy, vz, vz if z_deriv is None else z_deriv, acc[0], acc[1], acc[2],
+        heading, 0.0, bottom, 0.3, 0.4, 0.1, 0.1, ref[0], ref[1], ref[2], ref_t_us, NAN, NAN, NAN, NAN,
+        valid, valid, valid, valid, valid, valid, dist_bottom_valid, valid, False,
     )  # fmt: skip
 
 

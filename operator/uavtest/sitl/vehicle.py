@@ -165,6 +165,7 @@ class Vehicle:
             random.Random(f"{seed}:estimator"),
             random.Random(f"{seed}:estimator-z"),
             random.Random(f"{seed}:estimator-heading"),
+            random.Random(f"{seed}:estimator-ground"),
         )
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
@@ -464,6 +465,12 @@ class Vehicle:
 
     def _control_tick(self, t: int) -> None:
         dt = CONTROL_DT
+        # SIH's range finder reads below its minimum on the ground: EKF2 fuses it again only
+        # once landed (its on-ground reading), the estimate meanwhile shifts (ekf2.py)
+        if self.body.on_ground and not self.land.landed:
+            self.est.range_lost()
+        else:
+            self.est.range_fused(-self.body.z, self.land.landed)
         self.est.update(dt)
         self.wind.update(dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:
@@ -760,7 +767,9 @@ class Vehicle:
                 ref,
                 0,
                 True,
-                -b.z,  # SIH's downward range finder: the true height
+                e.hagl(-b.z),  # SIH's downward range finder: the true height while fused
+                e.terrain_valid,
+                b.vz + e.z_deriv_error,
             )
         )
         if tick % (CONTROL_EVERY * 2) == 0:  # 25 Hz
@@ -782,7 +791,7 @@ class Vehicle:
                     0,
                     True,
                     -b.z,
-                    topics.VehicleLocalPositionGroundtruth,
+                    cls=topics.VehicleLocalPositionGroundtruth,
                 )
             )
             lat, lon = self.proj.reproject(st.x, st.y)

@@ -210,27 +210,30 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: 0.10 s after the thrust setpoint, then a 0.06 s lag, as all nine SIH logs show), FlightTaskAuto's
 #: offtrack state in 3-D, the triplet's previous and next, vehicle_local_position_setpoint and the
 #: ground truth (vehicle_local_position_groundtruth, vehicle_attitude_groundtruth) logged, and
-#: LNDMC_XY_VEL_MAX modelled (the land detector judges movement on the estimate).
+#: LNDMC_XY_VEL_MAX modelled (the land detector judges movement on the estimate) (2026-11-25,
+#: later); and for EKF2's altitude shift after touchdown (range finder below its minimum, 16 PX4
+#: SIH flights with ground truth), the frozen terrain estimate (dist_bottom, its 5 s validity, the
+#: land detector's "close to ground" and hysteresis factor 3) and z_deriv logged (2026-11-26).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "12b1fc7f6e2394c917daa8f37e2abc4b6e2137f36370fda558c34317d68b0e69",
-        "94d20f769f513ef187337d1866f0c014bc8c7251e4521b441acd79d172b1a69c",
+        "f996a41f2b3bd7dbb4bf5db1848e9f3d77cc15f8144c796107b10a770d49f338",
+        "78de6388b0ca42b1b086cc3eb222da4d5a021252fbc7899e24fbccb204986a43",
     ),
     "manual_and_rtl": (
-        "68353ca4f653a636c9d59143d13c24716b76faaeaa5b653972ec4f7cd4a2741c",
-        "c8d0dd90f0d3c3a5db3e189053f21a5ba8f77d3fbb6a768c478b6685756b01e6",
+        "baf259171c40cec27c3b03ffc1b6dd157598d58727cd36196f8f7e44c70d013f",
+        "c4cbee84e52f3cb8d04a30cd99d113f7d9e98abfd148854781fc90ae45c455b3",
     ),
     "datalink_loss": (
-        "8c2ce57ff645fb5e52a88a8dd9e072713f905c0105530ef61c4d8af3cb0e6b6f",
+        "87bb2467a088a51f91ee27db5920c2e6d2808fc37f0afa8ddde7d79cd1066a7b",
         "72bc4e13ad8468663b9e81cdb0eadbf7e98d7d8bcb2c9f489f777ca360207e69",
     ),
     "crash": (
-        "77bc5841188b60638fb4a6b184231b572c0e92bb770fcabc95c2410d7add99bc",
-        "c03c8b70c30215b8efe4d25a7b35524fa790f3a22923bde7a518d162719bef71",
+        "1570e57c62092adfc01ac8dbd1aa669bfb02da36d94b6df651aa0ac64bedb8a2",
+        "b5c6ed9a31c7d05dac97c497c705dd9201d9daf4001208374c45ce26ef02f530",
     ),
     "params_and_commands": (
-        "ef1d2c2a0817946733f75444121e3075cc7f5147a90675e23230c117af72334f",
-        "91b70b0bbf3216b24856f9c37fd654ed67706ba182bf97d29b2716c09cd33c3c",
+        "b22b851c8a303e68747dc8d990fd45d058fa9fd72430b3f768d19c8ba69d8e00",
+        "1c505ad199ecc29b0f1c3001ed8e0608a07b93d4eb032a75b99644c0f0bc01de",
     ),
 }
 

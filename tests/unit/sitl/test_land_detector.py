@@ -109,11 +109,16 @@ def test_mission_landing_takes_px4_sih_time(shared_data: Path):
         started = next(t for seq, t in flight.reached if seq == len(items) - 1)
         assert flight.landed_s is not None
         ours.append(flight.landed_s - started)
-    assert all(low <= d <= high for d in ours), f"PX4 {px4}, built-in {ours}"
+    # EKF2's altitude shift after touchdown delays some landings (5 of 16 PX4 SIH flights flown
+    # here: touchdown to landed 8.2-9.5 s instead of 1.4-2.8 s, i.e. up to 8.1 s more)
+    quick = [d for d in ours if low <= d <= high]
+    assert len(quick) >= 5, f"PX4 {px4}, built-in {ours}"
+    assert all(low <= d <= high + 8.1 for d in ours), f"PX4 {px4}, built-in {ours}"
 
 
 def test_no_landing_is_detected_in_the_air_and_it_follows_touchdown_by_px4s_hysteresis():
     v = _landing_from_3m(3)
+    v.est.ground_shift = 0.0  # no EKF2 shift after touchdown (see the tests below)
     seen_landed_in_air = []
 
     def touched(v) -> bool:
@@ -134,6 +139,7 @@ def test_no_landing_while_the_estimate_still_moves():
     the ground whose estimate still climbs at 0.3 m/s (LNDMC_Z_VEL_MAX 0.25) is not landed; it is
     once the estimate settles. PX4 v1.15 SIH shows this after hard touchdowns (up to 9.7 s)."""
     v = _landing_from_3m(25)
+    v.est.ground_shift = 0.0
     v.fly_until(lambda v: v.body.on_ground, 60_000_000)
     assert not v.landed
     e = v.est
@@ -144,4 +150,45 @@ def test_no_landing_while_the_estimate_still_moves():
         v.advance(v.time_us + 20_000)
         assert not v.landed, f"landed {(v.time_us - touchdown) / 1e6:.1f} s after touchdown while moving"
     v.fly_until(lambda v: v.landed, 10_000_000)
-    assert v.landed and v.landed_at_us - held_until < 3_000_000
+    # the range finder has not been fused for 5 s: EKF2's terrain estimate is invalid and each
+    # land-detector stage takes the full LNDMC_TRIG_TIME (1 s)
+    assert v.landed and 3_000_000 <= v.landed_at_us - held_until < 4_000_000
+
+
+def _touchdown_with_shift(shift: float):
+    v = _landing_from_3m(25)
+    v.est.ground_shift = shift
+    v.fly_until(lambda v: v.body.on_ground, 60_000_000)
+    assert not v.landed
+    touchdown = v.time_us
+    stages: dict[str, float] = {}
+
+    def landed(v) -> bool:
+        for name in ("ground_contact", "maybe_landed"):
+            if getattr(v, name) and name not in stages:
+                stages[name] = v.time_us
+        return v.landed
+
+    v.fly_until(landed, 20_000_000)
+    assert v.landed
+    return v, (v.landed_at_us - touchdown) / 1e6, {k: (v.landed_at_us - t) / 1e6 for k, t in stages.items()}
+
+
+def test_ekf2s_climb_after_touchdown_delays_the_landing_as_in_px4_sih():
+    """PX4 v1.15 SIH, 16 flights flown here: when EKF2's altitude shifts by about a metre after
+    touchdown (the range finder reads below its minimum, the baro/GNSS height takes over), the
+    estimate climbs at 0.3-0.5 m/s and its distance to the ground passes 1 m; the land detector
+    waits until the terrain estimate times out (5 s) and then takes LNDMC_TRIG_TIME per stage:
+    landed 8.2-9.5 s after touchdown, ground_contact 2.0 s and maybe_landed 1.0 s before it."""
+    v, after, stages = _touchdown_with_shift(-1.3)
+    assert 7.5 <= after <= 9.5
+    assert stages["ground_contact"] == pytest.approx(2.0, abs=0.3)
+    assert stages["maybe_landed"] == pytest.approx(1.0, abs=0.3)
+    assert v.est.z_shift == pytest.approx(-1.3, abs=0.01)  # the estimate stays where it went
+
+
+def test_a_small_shift_after_touchdown_does_not_delay_the_landing():
+    """PX4 SIH: shifts of 0.6 m or less (11 of 16 flights) landed 1.4-2.8 s after touchdown."""
+    for shift in (-0.5, 0.0, 0.5):
+        _, after, _ = _touchdown_with_shift(shift)
+        assert 1.3 <= after <= 2.0, f"shift {shift} m: landed {after:.1f} s after touchdown"
