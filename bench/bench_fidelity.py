@@ -49,6 +49,7 @@ from uavtest.analysis.fidelity import (
     arrival_velocity_errors,
     displacement_errors,
     estimate_errors,
+    estimate_lead,
     flight_figures,
     pairs_between,
     pairs_within,
@@ -130,6 +131,8 @@ class Flights:
     attitude: list[AttitudeResponse] = dataclasses.field(default_factory=list)
     #: per flight that logs its ground truth: EKF2's position and velocity error std against it
     truth: list[tuple[float, float]] = dataclasses.field(default_factory=list)
+    #: per such flight: by how many seconds of velocity the estimate leads the truth
+    lead: list[float] = dataclasses.field(default_factory=list)
 
 
 def _measure(ulog: ULog, into: Flights) -> None:
@@ -154,6 +157,12 @@ def _measure(ulog: ULog, into: Flights) -> None:
                 gt["timestamp"] / 1e6,
                 np.column_stack([gt[k] for k in cols]),
                 (traj.t[0], traj.t[-1]),
+            )
+        )
+        truth = np.column_stack([gt[k] for k in cols])
+        into.lead.append(
+            estimate_lead(
+                t, np.column_stack([lp["x"], lp["y"]]), gt["timestamp"] / 1e6, truth, (traj.t[0], traj.t[-1])
             )
         )
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
@@ -282,6 +291,13 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "",
             "",
         )
+        t.add_row(
+            "EKF2 position's lead on the ground truth, s of velocity: mean (min–max)",
+            _spread(px4_all.lead),
+            _spread(ours_all.lead),
+            "",
+            "",
+        )
     if px4_all.attitude and ours_all.attitude:
         t.add_row(
             "attitude response (tilt after thrust setpoint): delay + lag, median",
@@ -291,6 +307,10 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "",
         )
     return t, ok
+
+
+def _spread(values: list[float]) -> str:
+    return f"{np.mean(values):.3f} ({min(values):.3f}–{max(values):.3f}, {len(values)} flights)"
 
 
 def _truth(errors: list[tuple[float, float]]) -> str:

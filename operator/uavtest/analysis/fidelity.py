@@ -180,6 +180,37 @@ def estimate_errors(
     return float((std[0] + std[1]) / 2), float((std[2] + std[3]) / 2)
 
 
+def estimate_lead(
+    t: np.ndarray,
+    estimate: np.ndarray,
+    t_truth: np.ndarray,
+    truth: np.ndarray,
+    window: tuple[float, float],
+    span: float = 1.0,
+    rate: float = 10.0,
+) -> float:
+    """By how many seconds of its velocity the estimated position leads the ground truth (PX4
+    SIH: EKF2 fuses SIH's undelayed GPS as EKF2_GPS_DELAY old). Fitted on changes over ``span``
+    seconds, where the true velocity changed by more than 0.5 m/s, so a slowly drifting offset
+    does not count: change of the position error = lead x change of the true velocity, both
+    horizontal axes pooled. ``estimate``: (N, 2) x, y; ``truth``: (M, 4) x, y, vx, vy."""
+    g = np.arange(window[0], window[1], 1.0 / rate)
+    k = round(span * rate)
+    if len(g) <= k:
+        raise BadInput("estimate lead: the window is shorter than the span")
+    de, dv = [], []
+    for i in range(2):
+        e = np.interp(g, t, estimate[:, i]) - np.interp(g, t_truth, truth[:, i])
+        v = np.interp(g, t_truth, truth[:, 2 + i])
+        de.append(e[k:] - e[:-k])
+        dv.append(v[k:] - v[:-k])
+    d_e, d_v = np.concatenate(de), np.concatenate(dv)
+    moved = np.abs(d_v) > 0.5
+    if not moved.any():
+        raise BadInput("estimate lead: the true velocity never changed by 0.5 m/s within the span")
+    return float(np.sum(d_e[moved] * d_v[moved]) / np.sum(d_v[moved] ** 2))
+
+
 def pooled_autocorrelation(series: Sequence[np.ndarray], lag: int) -> float:
     """The autocorrelation at ``lag`` samples of several series pooled (each about its own mean)."""
     num = den = 0.0

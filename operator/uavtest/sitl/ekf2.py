@@ -45,6 +45,17 @@ the slow drift of EKF2's GPS-referenced altitude (``square-mission.ulg``: 0.2-0.
 ground truth over tens of seconds; PX4 lands with its estimate -1.0 to +0.7 m off its lift-off
 altitude); ``SIGMA_Z`` stays small.
 
+The horizontal estimate also *leads* the truth by ``GPS_LEAD_S`` of the velocity: SIH's GPS
+(``sensor_gps_sim``) reports the true position of the moment, while EKF2 fuses it as if it were
+``EKF2_GPS_DELAY`` (110 ms) old. In the 16 PX4 v1.15 SIH flights flown here and the shared
+``square-mission.ulg``, the estimate's error against the ground truth changes with the true
+velocity by 0.063-0.128 s of it (``analysis.fidelity.estimate_lead``; mean 0.097), the GPS's
+own by 0.00 s; on a leg at 4 m/s that is half of PX4's 0.16-0.23 m position error against the
+truth. Its velocity leads likewise, by ``GPS_LEAD_S`` of the acceleration. The controller
+flies the estimate, so the vehicle truly trails its setpoints by it. ``update`` takes the true
+horizontal velocity for it (none: no lead). Gazebo's GPS plugin (the local planner's system)
+delays its fixes by 120 ms itself, so there ``gps_lead`` is 0.
+
 At touchdown the estimate moves on its own. SIH's downward range finder reads 0 on the ground,
 below its minimum, so EKF2 stops fusing it until the land detector says landed (then EKF2 fakes
 an on-ground reading and fuses again). In between, the height follows the barometer/GNSS
@@ -63,7 +74,7 @@ from __future__ import annotations
 import math
 import random
 
-__all__ = ["Estimator"]
+__all__ = ["GPS_LEAD_S", "Estimator"]
 
 TAU = 4.0  # s: position error leak (GPS corrections)
 TAU_V = 1.0  # s: velocity error correlation time
@@ -74,6 +85,8 @@ TAU_HEADING = 5.0  # s: the heading error's correlation time on a leg
 SIGMA_HEADING = math.radians(2.2)  # rad: its spread within a flight, on straight legs
 HEADING_OFFSET_MEAN = math.radians(2.4)  # rad: its per-flight offset (PX4 SIH: mostly positive)
 HEADING_OFFSET_SPREAD = math.radians(2.6)  # rad
+GPS_LEAD_S = 0.10  # s: the horizontal estimate leads the truth by this much of the velocity
+LEAD_ACC_MAX = 9.81  # m/s^2: the acceleration the velocity's lead follows at most
 GROUND_SHIFT_MEAN = -0.28  # m: the estimate's shift after touchdown (PX4 SIH, 16 flights)
 GROUND_SHIFT_SPREAD = 0.69  # m
 GROUND_SHIFT_TIME = 4.0  # s: the shift's half sine
@@ -98,6 +111,8 @@ class Estimator:
         "_cvx",
         "_cvy",
         "_cvz",
+        "_exl",
+        "_eyl",
         "_ez_loss",
         "_ezl",
         "_lost_s",
@@ -105,6 +120,8 @@ class Estimator:
         "_rng_z",
         "_shift_s",
         "_sv",
+        "_vx_prev",
+        "_vy_prev",
         "bx",
         "by",
         "bz",
@@ -116,6 +133,7 @@ class Estimator:
         "ex",
         "ey",
         "ez",
+        "gps_lead",
         "ground_shift",
         "vz_shift",
         "z_shift",
@@ -147,6 +165,9 @@ class Estimator:
         self.evx, self.evy = self._cvx + self.bx, self._cvy + self.by
         self.evz = self._cvz + self.bz
         self._ezl = self.ez  # the leaky part of ez; ez adds the shift after touchdown
+        self._exl, self._eyl = self.ex, self.ey  # the leaky parts of ex, ey; they add the lead
+        self._vx_prev = self._vy_prev = 0.0
+        self.gps_lead = GPS_LEAD_S
         #: the altitude shift after touchdown, from its own stream (the other errors of a seed
         #: stay what they were before it was calibrated)
         self.ground_shift = (rng_ground or random.Random(0)).gauss(GROUND_SHIFT_MEAN, GROUND_SHIFT_SPREAD)
@@ -193,8 +214,8 @@ class Estimator:
             return height_at_loss
         return height_at_loss + self._ez_loss - self.ez
 
-    def update(self, dt: float) -> None:
-        """Advance ``dt`` seconds."""
+    def update(self, dt: float, vx: float = 0.0, vy: float = 0.0) -> None:
+        """Advance ``dt`` seconds; ``vx``, ``vy``: the true horizontal velocity (the GPS lead)."""
         av = math.exp(-dt / TAU_V)
         bv = math.sqrt(1 - av * av)
         leak = 1.0 - dt / TAU
@@ -203,8 +224,11 @@ class Estimator:
         self._cvx = av * self._cvx + bv * sx * g(0.0, 1.0)
         self._cvy = av * self._cvy + bv * sy * g(0.0, 1.0)
         self._cvz = av * self._cvz + bv * sz * g(0.0, 1.0)
-        self.ex = leak * self.ex + self._cvx * dt
-        self.ey = leak * self.ey + self._cvy * dt
+        self._exl = leak * self._exl + self._cvx * dt
+        self._eyl = leak * self._eyl + self._cvy * dt
+        lead = self.gps_lead
+        self.ex = self._exl + lead * vx
+        self.ey = self._eyl + lead * vy
         self._ezl = leak * self._ezl + self._cvz * dt
         if self._lost_s >= 0.0:
             self._lost_s += dt
@@ -221,8 +245,12 @@ class Estimator:
         bb = math.sqrt(1 - ab * ab) * SIGMA_BIAS
         self.bx = ab * self.bx + bb * g(0.0, 1.0)
         self.by = ab * self.by + bb * g(0.0, 1.0)
-        self.evx = self._cvx + self.bx
-        self.evy = self._cvy + self.by
+        # the lead's velocity part: the true acceleration, bounded (an impact is not a GPS lead)
+        ax = max(-LEAD_ACC_MAX, min(LEAD_ACC_MAX, (vx - self._vx_prev) / dt))
+        ay = max(-LEAD_ACC_MAX, min(LEAD_ACC_MAX, (vy - self._vy_prev) / dt))
+        self.evx = self._cvx + self.bx + lead * ax
+        self.evy = self._cvy + self.by + lead * ay
+        self._vx_prev, self._vy_prev = vx, vy
         self.bz = ab * self.bz + bb * (SIGMA_BIAS_Z / SIGMA_BIAS) * self._rng_z.gauss(0.0, 1.0)
         self.evz = self._cvz + self.bz + self.vz_shift
         ah = math.exp(-dt / TAU_HEADING)

@@ -213,27 +213,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: LNDMC_XY_VEL_MAX modelled (the land detector judges movement on the estimate) (2026-11-25,
 #: later); and for EKF2's altitude shift after touchdown (range finder below its minimum, 16 PX4
 #: SIH flights with ground truth), the frozen terrain estimate (dist_bottom, its 5 s validity, the
-#: land detector's "close to ground" and hysteresis factor 3) and z_deriv logged (2026-11-26).
+#: land detector's "close to ground" and hysteresis factor 3) and z_deriv logged (2026-11-26);
+#: and for EKF2's horizontal estimate leading the truth by 0.10 s of its velocity (EKF2_GPS_DELAY
+#: against SIH's undelayed GPS; not with the local planner's Gazebo, whose GPS plugin delays).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "f996a41f2b3bd7dbb4bf5db1848e9f3d77cc15f8144c796107b10a770d49f338",
-        "78de6388b0ca42b1b086cc3eb222da4d5a021252fbc7899e24fbccb204986a43",
+        "cb17f699e40971100e4352bd03325db14fa8d79b535a6313f1cd8c3a578441ad",
+        "8090fcc9a829fbd9bf1665da173e06b7fbb07360390af6e3b87529ae9f4bf1d9",
     ),
     "manual_and_rtl": (
-        "baf259171c40cec27c3b03ffc1b6dd157598d58727cd36196f8f7e44c70d013f",
-        "c4cbee84e52f3cb8d04a30cd99d113f7d9e98abfd148854781fc90ae45c455b3",
+        "ef808865c3351f90a3060b90f224b5bbcc95bdaa817853cce10e8f622fedc044",
+        "52b59bc7e37e994678aa2a0ff1e1f33bd8bde4c1640a5726ebed64f4ffa6b653",
     ),
     "datalink_loss": (
         "87bb2467a088a51f91ee27db5920c2e6d2808fc37f0afa8ddde7d79cd1066a7b",
         "72bc4e13ad8468663b9e81cdb0eadbf7e98d7d8bcb2c9f489f777ca360207e69",
     ),
     "crash": (
-        "1570e57c62092adfc01ac8dbd1aa669bfb02da36d94b6df651aa0ac64bedb8a2",
-        "b5c6ed9a31c7d05dac97c497c705dd9201d9daf4001208374c45ce26ef02f530",
+        "bf43d19a0eb8a101fc1dc153cb1b000c8104709aba53dbd233cfabb1a180e0ee",
+        "7d6573880365c15ab58b98c04b0834d2d11ad9b5c9310f65477791c12dbc175d",
     ),
     "params_and_commands": (
-        "b22b851c8a303e68747dc8d990fd45d058fa9fd72430b3f768d19c8ba69d8e00",
-        "1c505ad199ecc29b0f1c3001ed8e0608a07b93d4eb032a75b99644c0f0bc01de",
+        "de856de185271b7d98a8439e152c5bf120818ae06c105c5534a0a8a646704532",
+        "ac3c848b1f6da43e2ed97ba7ff10da14b047cef2f16c05af48610475b2e98688",
     ),
 }
 
