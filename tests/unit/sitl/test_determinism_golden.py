@@ -214,28 +214,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: later); and for EKF2's altitude shift after touchdown (range finder below its minimum, 16 PX4
 #: SIH flights with ground truth), the frozen terrain estimate (dist_bottom, its 5 s validity, the
 #: land detector's "close to ground" and hysteresis factor 3) and z_deriv logged (2026-11-26);
-#: and for EKF2's horizontal estimate leading the truth by 0.10 s of its velocity (EKF2_GPS_DELAY
-#: against SIH's undelayed GPS; not with the local planner's Gazebo, whose GPS plugin delays).
+#: and for EKF2's horizontal estimate leading the truth by 0.10 s of its velocity (its velocity
+#: by 0.03 s of the acceleration; EKF2_GPS_DELAY against SIH's undelayed GPS; not with the local
+#: planner's Gazebo, whose GPS plugin delays).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "cb17f699e40971100e4352bd03325db14fa8d79b535a6313f1cd8c3a578441ad",
-        "8090fcc9a829fbd9bf1665da173e06b7fbb07360390af6e3b87529ae9f4bf1d9",
+        "8abfbb74603d24ccdc533df0bab8fedc6b7006603bb32efa522809b48dbe5713",
+        "5b3d5a173d659f15fe408d153f49749141f855a62a907d3cc8590c4079aa063f",
     ),
     "manual_and_rtl": (
-        "ef808865c3351f90a3060b90f224b5bbcc95bdaa817853cce10e8f622fedc044",
-        "52b59bc7e37e994678aa2a0ff1e1f33bd8bde4c1640a5726ebed64f4ffa6b653",
+        "25fe68ac5863dc40ef9c43af6d3843b266683e9b86ae2b06cb6929e25261fd99",
+        "b3bcf4de550dedef8255cffcee97f3fd045e9d4a4d110fa339f25fcd0c4f7d3b",
     ),
     "datalink_loss": (
         "87bb2467a088a51f91ee27db5920c2e6d2808fc37f0afa8ddde7d79cd1066a7b",
         "72bc4e13ad8468663b9e81cdb0eadbf7e98d7d8bcb2c9f489f777ca360207e69",
     ),
     "crash": (
-        "bf43d19a0eb8a101fc1dc153cb1b000c8104709aba53dbd233cfabb1a180e0ee",
-        "7d6573880365c15ab58b98c04b0834d2d11ad9b5c9310f65477791c12dbc175d",
+        "432a70c875a039357d737e38b20dd01cd9362d46cd60594d97585f989c2119f8",
+        "2d4eb783c75bb0f23abb47c8e8b7944043b27fb42f6e2d13dc8ee7169b1f3bba",
     ),
     "params_and_commands": (
-        "de856de185271b7d98a8439e152c5bf120818ae06c105c5534a0a8a646704532",
-        "ac3c848b1f6da43e2ed97ba7ff10da14b047cef2f16c05af48610475b2e98688",
+        "7173d9e81899185d21fabd8b8867a09b2fbf0c55debd754bd34a196225e1ff96",
+        "1bff23b4d10b5dc769066624f79d816a7c90ba1f075dcb5829f58be5df7940db",
     ),
 }
 

@@ -205,7 +205,8 @@ def test_inclusion_circle_terminate_and_warning():
     v = ready(GF_ACTION=4)
     upload(v, [item(v, 0, NAV_FENCE_CIRCLE_INCLUSION, 0, 0, 20)], FENCE)
     take_off_then_sticks(v, lambda v: v.crashed)
-    assert v.crashed and not v.body.motors and 20 <= v.body.x < 25
+    # the breach is judged on the estimate, which leads the truth (ekf2.py GPS_LEAD_S: ~0.3 m here)
+    assert v.crashed and not v.body.motors and 19.5 <= v.body.x < 25
     v = ready(GF_ACTION=1)
     upload(v, [item(v, 0, NAV_FENCE_CIRCLE_INCLUSION, 0, 0, 20)], FENCE)
     texts = take_off_then_sticks(v, lambda v: v.body.x > 40)
