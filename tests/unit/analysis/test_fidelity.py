@@ -10,6 +10,7 @@ from uavtest.analysis.fidelity import (
     arrival_velocity_errors,
     compare,
     estimate_errors,
+    estimate_lead,
     flight_figures,
     from_liftoff,
     pairs_between,
@@ -163,3 +164,27 @@ def test_estimate_errors_against_px4_sihs_ground_truth(square_log) -> None:
         (136.5, 176.0),
     )
     assert same == pytest.approx((0.0, 0.0), abs=1e-9)
+
+
+def _truth_track() -> tuple[np.ndarray, np.ndarray]:
+    """Accelerate north to 4 m/s, cruise, brake: (t, truth columns x, y, vx, vy) at 50 Hz."""
+    t = np.arange(0.0, 30.0, 0.02)
+    vx = np.clip(np.minimum(t - 2.0, 26.0 - t), 0.0, 4.0)
+    x = np.cumsum(vx) * 0.02
+    return t, np.column_stack([x, np.zeros_like(t), vx, np.zeros_like(t)])
+
+
+def test_estimate_lead_recovers_a_lead_and_ignores_a_drifting_offset() -> None:
+    t, truth = _truth_track()
+    drift = 0.3 + 0.01 * t  # a slow offset is not a lead
+    estimate = np.column_stack([truth[:, 0] + 0.1 * truth[:, 2] + drift, truth[:, 1]])
+    assert estimate_lead(t, estimate, t, truth, (1.0, 29.0)) == pytest.approx(0.1, abs=0.01)
+    assert estimate_lead(t, truth[:, :2], t, truth, (1.0, 29.0)) == pytest.approx(0.0, abs=1e-9)
+
+
+def test_estimate_lead_refuses_what_cannot_tell_it() -> None:
+    t, truth = _truth_track()
+    with pytest.raises(BadInput, match="shorter than the span"):
+        estimate_lead(t, truth[:, :2], t, truth, (10.0, 10.5))
+    with pytest.raises(BadInput, match="never changed"):  # cruising only: no change of velocity
+        estimate_lead(t, truth[:, :2], t, truth, (10.0, 20.0))
