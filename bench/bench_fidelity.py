@@ -150,21 +150,11 @@ def _measure(ulog: ULog, into: Flights) -> None:
     if any(d.name == "vehicle_local_position_groundtruth" for d in ulog.data_list):
         gt = ulog.get_dataset("vehicle_local_position_groundtruth").data
         cols = ("x", "y", "vx", "vy")
-        into.truth.append(
-            estimate_errors(
-                t,
-                np.column_stack([lp[k] for k in cols]),
-                gt["timestamp"] / 1e6,
-                np.column_stack([gt[k] for k in cols]),
-                (traj.t[0], traj.t[-1]),
-            )
-        )
+        estimate = np.column_stack([lp[k] for k in cols])
         truth = np.column_stack([gt[k] for k in cols])
-        into.lead.append(
-            estimate_lead(
-                t, np.column_stack([lp["x"], lp["y"]]), gt["timestamp"] / 1e6, truth, (traj.t[0], traj.t[-1])
-            )
-        )
+        flown = (traj.t[0], traj.t[-1])
+        into.truth.append(estimate_errors(t, estimate, gt["timestamp"] / 1e6, truth, flown))
+        into.lead.append(estimate_lead(t, estimate, gt["timestamp"] / 1e6, truth, flown))
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     att = ulog.get_dataset("vehicle_attitude").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])

@@ -173,11 +173,17 @@ def estimate_errors(
     g = np.arange(window[0], window[1], 1.0 / rate)
     if len(g) < 2:
         raise BadInput("estimate errors: the window is empty")
-    err = np.column_stack(
-        [np.interp(g, t, estimate[:, i]) - np.interp(g, t_truth, truth[:, i]) for i in range(4)]
-    )
-    std = err.std(axis=0)
+    std = _errors_on(g, t, estimate, t_truth, truth, 4).std(axis=0)
     return float((std[0] + std[1]) / 2), float((std[2] + std[3]) / 2)
+
+
+def _errors_on(
+    g: np.ndarray, t: np.ndarray, estimate: np.ndarray, t_truth: np.ndarray, truth: np.ndarray, n: int
+) -> np.ndarray:
+    """The estimate's first ``n`` columns minus the truth's, both interpolated onto ``g``."""
+    return np.column_stack(
+        [np.interp(g, t, estimate[:, i]) - np.interp(g, t_truth, truth[:, i]) for i in range(n)]
+    )
 
 
 def estimate_lead(
@@ -193,18 +199,15 @@ def estimate_lead(
     SIH: EKF2 fuses SIH's undelayed GPS as EKF2_GPS_DELAY old). Fitted on changes over ``span``
     seconds, where the true velocity changed by more than 0.5 m/s, so a slowly drifting offset
     does not count: change of the position error = lead x change of the true velocity, both
-    horizontal axes pooled. ``estimate``: (N, 2) x, y; ``truth``: (M, 4) x, y, vx, vy."""
+    horizontal axes pooled. ``estimate``: (N, 2 or more) columns x, y first; ``truth``: (M, 4) x,
+    y, vx, vy."""
     g = np.arange(window[0], window[1], 1.0 / rate)
     k = round(span * rate)
     if len(g) <= k:
         raise BadInput("estimate lead: the window is shorter than the span")
-    de, dv = [], []
-    for i in range(2):
-        e = np.interp(g, t, estimate[:, i]) - np.interp(g, t_truth, truth[:, i])
-        v = np.interp(g, t_truth, truth[:, 2 + i])
-        de.append(e[k:] - e[:-k])
-        dv.append(v[k:] - v[:-k])
-    d_e, d_v = np.concatenate(de), np.concatenate(dv)
+    err = _errors_on(g, t, estimate, t_truth, truth, 2)
+    vel = np.column_stack([np.interp(g, t_truth, truth[:, 2 + i]) for i in range(2)])
+    d_e, d_v = (err[k:] - err[:-k]).ravel(), (vel[k:] - vel[:-k]).ravel()
     moved = np.abs(d_v) > 0.5
     if not moved.any():
         raise BadInput("estimate lead: the true velocity never changed by 0.5 m/s within the span")

@@ -93,6 +93,7 @@ GROUND_SHIFT_MEAN = -0.28  # m: the estimate's shift after touchdown (PX4 SIH, 1
 GROUND_SHIFT_SPREAD = 0.69  # m
 GROUND_SHIFT_TIME = 4.0  # s: the shift's half sine
 TERRAIN_TIMEOUT_S = 5.0  # s: Ekf::isTerrainEstimateValid, range fused within the last 5 s
+HAGL_ON_GROUND = 0.1  # m: EKF2's distance to the ground at touchdown (EKF2_MIN_RNG; PX4 SIH 0.07-0.2)
 TAU_BIAS = 4.0  # s: velocity bias correlation time
 SIGMA_BIAS = 0.22  # m/s: per axis
 #: stationary standard deviation of x for x' = -x / TAU + v, v Gauss-Markov(sigma_v, TAU_V):
@@ -209,12 +210,13 @@ class Estimator:
         """EKF2's terrain estimate, so ``dist_bottom``, is valid: the range fused within 5 s."""
         return self._lost_s < TERRAIN_TIMEOUT_S
 
-    def hagl(self, height_at_loss: float) -> float:
-        """The estimated distance to the ground: the terrain estimate froze when the range finder
-        was lost (``height_at_loss`` above the ground then), the estimated altitude moved on."""
+    def hagl(self, height: float) -> float:
+        """The estimated distance to the ground: the range finder's ``height`` while it is fused;
+        since it was lost (on the ground), the terrain estimate frozen at ``HAGL_ON_GROUND`` below
+        an estimated altitude that moved on."""
         if self._lost_s < 0.0:
-            return height_at_loss
-        return height_at_loss + self._ez_loss - self.ez
+            return height
+        return HAGL_ON_GROUND + self._ez_loss - self.ez
 
     def update(self, dt: float, vx: float = 0.0, vy: float = 0.0) -> None:
         """Advance ``dt`` seconds; ``vx``, ``vy``: the true horizontal velocity (the GPS lead)."""

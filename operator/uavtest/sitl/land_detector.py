@@ -45,7 +45,6 @@ __all__ = ["TAKEOFF_DETECT_S", "LandDetector", "Transition"]
 
 TAKEOFF_DETECT_S = 0.8  # into the takeoff ramp, PX4's land detector reports the takeoff
 DIST_FROM_GROUND_THRESHOLD = 1.0  # m: MulticopterLandDetector's "close to ground"
-RNG_ON_GROUND = 0.1  # m: EKF2's distance to the ground at touchdown (EKF2_MIN_RNG; PX4 SIH 0.07-0.2)
 
 
 class Transition(Enum):
@@ -78,7 +77,10 @@ class LandDetector:
                     self._ground_since = None
                     return Transition.TAKEOFF
             elif (
-                b.on_ground and self.descent_commanded(goal) and not self.moving(b) and self.close_to_ground()
+                b.on_ground
+                and self.descent_commanded(goal)
+                and not self.moving(b)
+                and self.close_to_ground(b)
             ):
                 if self._ground_since is None:
                     self._ground_since = t
@@ -115,11 +117,11 @@ class LandDetector:
         horizontal = math.hypot(b.vx + e.evx, b.vy + e.evy) > self.params["LNDMC_XY_VEL_MAX"]
         return vertical or horizontal
 
-    def close_to_ground(self) -> bool:
-        """``_close_to_ground_or_skipped_check``: EKF2's distance to the ground under 1 m, or
-        skipped while its terrain estimate is invalid."""
+    def close_to_ground(self, b: Body) -> bool:
+        """``_close_to_ground_or_skipped_check``: EKF2's distance to the ground (the one logged as
+        ``dist_bottom``) under 1 m, or skipped while its terrain estimate is invalid."""
         e = self.est
-        return not e.terrain_valid or e.hagl(RNG_ON_GROUND) < DIST_FROM_GROUND_THRESHOLD
+        return not e.terrain_valid or e.hagl(-b.z) < DIST_FROM_GROUND_THRESHOLD
 
     def descent_commanded(self, goal: GoalKind) -> bool:
         """PX4's land detector: under climb-rate control, ground contact needs a commanded descent.

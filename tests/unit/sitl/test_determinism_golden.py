@@ -216,22 +216,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: land detector's "close to ground" and hysteresis factor 3) and z_deriv logged (2026-11-26);
 #: and for EKF2's horizontal estimate leading the truth by 0.10 s of its velocity (its velocity
 #: by 0.03 s of the acceleration; EKF2_GPS_DELAY against SIH's undelayed GPS; not with the local
-#: planner's Gazebo, whose GPS plugin delays).
+#: planner's Gazebo, whose GPS plugin delays); the logs again (the MAVLink streams unchanged) for
+#: dist_bottom logged as the land detector sees it after touchdown (0.1 m below the frozen terrain
+#: estimate, EKF2's on-ground distance, not the true 0).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "8abfbb74603d24ccdc533df0bab8fedc6b7006603bb32efa522809b48dbe5713",
+        "c4db45ff48c0ad0fc67578518362c1268bb1e3b9bde1ccb64d62b7f24c394eb5",
         "5b3d5a173d659f15fe408d153f49749141f855a62a907d3cc8590c4079aa063f",
     ),
     "manual_and_rtl": (
-        "25fe68ac5863dc40ef9c43af6d3843b266683e9b86ae2b06cb6929e25261fd99",
+        "ce0eb9157e289f8f0a59ea8b4c98de350c014bc12a716135cc7357d501f4234e",
         "b3bcf4de550dedef8255cffcee97f3fd045e9d4a4d110fa339f25fcd0c4f7d3b",
     ),
     "datalink_loss": (
-        "87bb2467a088a51f91ee27db5920c2e6d2808fc37f0afa8ddde7d79cd1066a7b",
+        "59dd373a1493a1e230b2959617595e5e722254812682107b396ac28c8710ae31",
         "72bc4e13ad8468663b9e81cdb0eadbf7e98d7d8bcb2c9f489f777ca360207e69",
     ),
     "crash": (
-        "432a70c875a039357d737e38b20dd01cd9362d46cd60594d97585f989c2119f8",
+        "97f6c1a86544dab49c37cb7ca8892fe30cb0ed8344ec834df3094cac4ec28830",
         "2d4eb783c75bb0f23abb47c8e8b7944043b27fb42f6e2d13dc8ee7169b1f3bba",
     ),
     "params_and_commands": (
