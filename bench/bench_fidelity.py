@@ -47,6 +47,8 @@ from uavtest.analysis.fidelity import (
     FIGURES,
     FlightFigures,
     arrival_velocity_errors,
+    body_frame_errors,
+    boot_time_correlation,
     displacement_errors,
     estimate_errors,
     estimate_lead,
@@ -133,6 +135,11 @@ class Flights:
     truth: list[tuple[float, float]] = dataclasses.field(default_factory=list)
     #: per such flight: by how many seconds of velocity the estimate leads the truth
     lead: list[float] = dataclasses.field(default_factory=list)
+    #: per such flight: EKF2's velocity error std fore-aft and sideways (body frame)
+    body: list[tuple[float, float]] = dataclasses.field(default_factory=list)
+    #: per flight and axis: (log time, velocity error) in the air, for ``boot_time_correlation``
+    boot_x: list = dataclasses.field(default_factory=list)
+    boot_y: list = dataclasses.field(default_factory=list)
 
 
 def _measure(ulog: ULog, into: Flights) -> None:
@@ -142,7 +149,12 @@ def _measure(ulog: ULog, into: Flights) -> None:
     t = lp["timestamp"] / 1e6
     air = (t >= traj.t[0]) & (t <= traj.t[-1])
     window = [lp[k][air] if k != "timestamp" else t[air] for k in ("timestamp", "x", "y", "vx", "vy")]
-    into.error_series += [e for e in velocity_errors(*window) if len(e)]
+    ex, ey = velocity_errors(*window)
+    into.error_series += [e for e in (ex, ey) if len(e)]
+    if len(ex):
+        g = np.arange(window[0][0] + 0.5, window[0][-1] - 0.5, 0.1)[: len(ex)]
+        into.boot_x.append((g, ex))
+        into.boot_y.append((g, ey))
     into.arrival_errors += arrival_velocity_errors(*window)
     vertical = displacement_errors(t[air], lp["z"][air], lp["vz"][air])
     if len(vertical):
@@ -155,6 +167,14 @@ def _measure(ulog: ULog, into: Flights) -> None:
         flown = (traj.t[0], traj.t[-1])
         into.truth.append(estimate_errors(t, estimate, gt["timestamp"] / 1e6, truth, flown))
         into.lead.append(estimate_lead(t, estimate, gt["timestamp"] / 1e6, truth, flown))
+        att = ulog.get_dataset("vehicle_attitude").data
+        q0, q1, q2, q3 = (att[f"q[{i}]"] for i in range(4))
+        yaw = np.arctan2(2 * (q0 * q3 + q1 * q2), 1 - 2 * (q2 * q2 + q3 * q3))
+        into.body.append(
+            body_frame_errors(
+                t, estimate[:, 2:], gt["timestamp"] / 1e6, truth[:, 2:], att["timestamp"] / 1e6, yaw, flown
+            )
+        )
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     att = ulog.get_dataset("vehicle_attitude").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
@@ -288,6 +308,23 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "",
             "",
         )
+    if px4_all.body and ours_all.body:
+        t.add_row(
+            "EKF2 velocity error against the ground truth, body frame: fore-aft / sideways std, m/s",
+            _body(px4_all.body),
+            _body(ours_all.body),
+            "",
+            "",
+        )
+    if len(px4_all.boot_x) > 1 and len(ours_all.boot_x) > 1:
+        t.add_row(
+            "EKF2 velocity error alike between flights at equal time since start: median best "
+            "correlation within ±2 s, x / y",
+            _boot(px4_all),
+            _boot(ours_all),
+            "",
+            "",
+        )
     if px4_all.attitude and ours_all.attitude:
         t.add_row(
             "attitude response (tilt after thrust setpoint): delay + lag, median",
@@ -307,6 +344,16 @@ def _truth(errors: list[tuple[float, float]]) -> str:
     pos = statistics.mean(e[0] for e in errors)
     vel = statistics.mean(e[1] for e in errors)
     return f"{pos:.2f} / {vel:.2f} ({len(errors)} flights)"
+
+
+def _body(errors: list[tuple[float, float]]) -> str:
+    fore = statistics.mean(e[0] for e in errors)
+    side = statistics.mean(e[1] for e in errors)
+    return f"{fore:.2f} / {side:.2f} ({len(errors)} flights)"
+
+
+def _boot(flights: Flights) -> str:
+    return f"{boot_time_correlation(flights.boot_x):.2f} / {boot_time_correlation(flights.boot_y):.2f}"
 
 
 def _response(fits: list[AttitudeResponse]) -> str:

@@ -50,6 +50,8 @@ __all__ = [
     "PairFigures",
     "Spread",
     "arrival_velocity_errors",
+    "body_frame_errors",
+    "boot_time_correlation",
     "compare",
     "displacement_errors",
     "estimate_errors",
@@ -212,6 +214,56 @@ def estimate_lead(
     if not moved.any():
         raise BadInput("estimate lead: the true velocity never changed by 0.5 m/s within the span")
     return float(np.sum(d_e[moved] * d_v[moved]) / np.sum(d_v[moved] ** 2))
+
+
+def body_frame_errors(
+    t: np.ndarray,
+    velocity: np.ndarray,
+    t_truth: np.ndarray,
+    truth: np.ndarray,
+    t_yaw: np.ndarray,
+    yaw: np.ndarray,
+    window: tuple[float, float],
+    rate: float = 10.0,
+) -> tuple[float, float]:
+    """The estimated horizontal velocity's error against the ground truth, turned into the body
+    frame by the heading: its standard deviation fore-aft (body x) and sideways (body y), each
+    about its mean. ``velocity``, ``truth``: (N, 2) vx, vy (NED); ``yaw`` (rad) at ``t_yaw``. PX4
+    SIH's accelerometer noise is 0.5 / 1.7 m/s^2 on the body's x / y axis (``sih.cpp``), and EKF2's
+    velocity error follows it."""
+    g = np.arange(window[0], window[1], 1.0 / rate)
+    if len(g) < 2:
+        raise BadInput("body-frame errors: the window is empty")
+    e = _errors_on(g, t, velocity, t_truth, truth, 2)
+    psi = np.interp(g, t_yaw, np.unwrap(yaw))
+    c, s = np.cos(psi), np.sin(psi)
+    fore = c * e[:, 0] + s * e[:, 1]
+    side = -s * e[:, 0] + c * e[:, 1]
+    return float(fore.std()), float(side.std())
+
+
+def boot_time_correlation(series: Sequence[tuple[np.ndarray, np.ndarray]], lag: float = 2.0) -> float:
+    """How alike flights' error series are at equal time since their simulator started: the
+    median over pairs of the best Pearson correlation within +- ``lag`` seconds, on the time both
+    cover. ``series``: per flight (t, e) at one common rate. Flights with independent noise give
+    about 0.2 (the best of several lags of noise); PX4 SIH seeds its noise with ``srand(1234)`` at
+    every start, so its flights share one realization, shifted by scheduling."""
+    if len(series) < 2:
+        raise BadInput("boot-time correlation needs at least two flights", value=len(series))
+    best: list[float] = []
+    for (ta, ea), (tb, eb) in combinations(series, 2):
+        dt = float(np.median(np.diff(ta)))
+        lo, hi = max(ta[0], tb[0]), min(ta[-1], tb[-1])
+        g = np.arange(lo, hi, dt)
+        n = round(lag / dt)
+        if len(g) <= 2 * n + 10:
+            continue
+        a, b = np.interp(g, ta, ea), np.interp(g, tb, eb)
+        cs = [np.corrcoef(a[n + k : len(g) - n + k], b[n : len(g) - n])[0, 1] for k in range(-n, n + 1)]
+        best.append(float(np.nanmax(cs)))
+    if not best:
+        raise BadInput("boot-time correlation: no two flights overlap in time")
+    return float(np.median(best))
 
 
 def pooled_autocorrelation(series: Sequence[np.ndarray], lag: int) -> float:

@@ -167,8 +167,10 @@ class Vehicle:
             random.Random(f"{seed}:estimator-heading"),
             random.Random(f"{seed}:estimator-ground"),
         )
-        if planner:  # Gazebo's GPS plugin delays its fixes as EKF2 assumes: no lead
+        if planner:  # Gazebo's GPS plugin delays its fixes as EKF2 assumes: no lead; its IMU
+            # plugin's noise is the same on every axis
             self.est.gps_lead = 0.0
+            self.est.body_noise = (1.0, 1.0)
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed, config.range_sensor)
@@ -473,7 +475,7 @@ class Vehicle:
             self.est.range_lost()
         else:
             self.est.range_fused(-self.body.z, self.land.landed)
-        self.est.update(dt, self.body.vx, self.body.vy)
+        self.est.update(dt, self.body.vx, self.body.vy, self.body.yaw)
         self.wind.update(dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:
             self.world.refresh_near(self.body.x, self.body.y)

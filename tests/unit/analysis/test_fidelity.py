@@ -8,6 +8,8 @@ import pytest
 from uavtest.analysis.fidelity import (
     NORMALISED_POINTS,
     arrival_velocity_errors,
+    body_frame_errors,
+    boot_time_correlation,
     compare,
     estimate_errors,
     estimate_lead,
@@ -188,3 +190,37 @@ def test_estimate_lead_refuses_what_cannot_tell_it() -> None:
         estimate_lead(t, truth[:, :2], t, truth, (10.0, 10.5))
     with pytest.raises(BadInput, match="never changed"):  # cruising only: no change of velocity
         estimate_lead(t, truth[:, :2], t, truth, (10.0, 20.0))
+
+
+def test_body_frame_errors_turn_the_error_with_the_heading() -> None:
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 60.0, 0.1)
+    fore, side = 0.1 * rng.standard_normal(len(t)), 0.3 * rng.standard_normal(len(t))
+    yaw = np.where(t < 30.0, 0.0, np.pi / 2)  # north, then east
+    c, s = np.cos(yaw), np.sin(yaw)
+    truth = np.column_stack([np.full_like(t, 2.0), np.zeros_like(t)])
+    estimate = truth + np.column_stack([c * fore - s * side, s * fore + c * side])
+    got = body_frame_errors(t, estimate, t, truth, t, yaw, (0.0, 59.9))
+    assert got == (pytest.approx(fore.std(), rel=0.05), pytest.approx(side.std(), rel=0.05))
+    # judged in NED instead, north and east each mix both halves: no axis stands out
+    assert np.std(estimate[:, 0] - 2.0) == pytest.approx(np.std(estimate[:, 1]), rel=0.2)
+    with pytest.raises(BadInput, match="empty"):
+        body_frame_errors(t, estimate, t, truth, t, yaw, (5.0, 5.0))
+
+
+def test_boot_time_correlation_tells_one_noise_realization_from_independent_ones() -> None:
+    rng = np.random.default_rng(7)
+    t = np.arange(0.0, 60.0, 0.1)
+    shared = np.convolve(rng.standard_normal(len(t) + 20), np.ones(20) / 20, mode="valid")[: len(t)]
+    # PX4 SIH: the same noise sequence, shifted a little by scheduling, plus a little of its own
+    same = [(t, np.roll(shared, k) + 0.05 * rng.standard_normal(len(t))) for k in (0, 3, 7, 12)]
+    independent = [
+        (t, np.convolve(rng.standard_normal(len(t) + 20), np.ones(20) / 20, mode="valid")[: len(t)])
+        for _ in range(4)
+    ]
+    assert boot_time_correlation(same) > 0.8
+    assert boot_time_correlation(independent) < 0.45
+    with pytest.raises(BadInput, match="at least two"):
+        boot_time_correlation(same[:1])
+    with pytest.raises(BadInput, match="overlap"):
+        boot_time_correlation([(t, shared), (t + 100.0, shared)])

