@@ -92,8 +92,8 @@ def test_collision_prevention_stops_the_pilot_short_of_the_wall(repo_root: Path,
     assert out.summary is not None and out.summary["passed"] == 3
     for r in out.summary["results"]:
         assert r["metrics"]["collision"] is False
-        # near CP_DIST (2 m), past it by the braking overshoot
-        assert 0.5 < r["metrics"]["min_obstacle_distance"] < 2.5
+        # near CP_DIST (2 m), past it by the braking overshoot (30 seeds: 0.4-1.8 m)
+        assert 0.3 < r["metrics"]["min_obstacle_distance"] < 2.5
     assert any("only in position mode" in w for w in out.summary["warnings"])
     # the same test without CP_DIST: CP off (said so), the pilot flies into the wall
     test = yaml.safe_load((repo_root / "examples/collision-prevention.yaml").read_text())
