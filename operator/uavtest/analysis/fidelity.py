@@ -172,11 +172,17 @@ def estimate_errors(
     ``vehicle_local_position_groundtruth``): the standard deviation per horizontal axis of the
     position error (about its mean: the EKF origin is not the simulator's) and of the velocity
     error, averaged over x and y. ``estimate`` and ``truth``: (N, 4) columns x, y, vx, vy."""
-    g = np.arange(window[0], window[1], 1.0 / rate)
-    if len(g) < 2:
-        raise BadInput("estimate errors: the window is empty")
+    g = _grid(window, rate, "estimate errors")
     std = _errors_on(g, t, estimate, t_truth, truth, 4).std(axis=0)
     return float((std[0] + std[1]) / 2), float((std[2] + std[3]) / 2)
+
+
+def _grid(window: tuple[float, float], rate: float, what: str) -> np.ndarray:
+    """Times across ``window`` at ``rate`` Hz; ``what`` names the figure a too short window fails."""
+    g = np.arange(window[0], window[1], 1.0 / rate)
+    if len(g) < 2:
+        raise BadInput(f"{what}: the window is empty")
+    return g
 
 
 def _errors_on(
@@ -231,9 +237,7 @@ def body_frame_errors(
     about its mean. ``velocity``, ``truth``: (N, 2) vx, vy (NED); ``yaw`` (rad) at ``t_yaw``. PX4
     SIH's accelerometer noise is 0.5 / 1.7 m/s^2 on the body's x / y axis (``sih.cpp``), and EKF2's
     velocity error follows it."""
-    g = np.arange(window[0], window[1], 1.0 / rate)
-    if len(g) < 2:
-        raise BadInput("body-frame errors: the window is empty")
+    g = _grid(window, rate, "body-frame errors")
     e = _errors_on(g, t, velocity, t_truth, truth, 2)
     psi = np.interp(g, t_yaw, np.unwrap(yaw))
     c, s = np.cos(psi), np.sin(psi)
