@@ -50,6 +50,7 @@ from uavtest.analysis.fidelity import (
     body_frame_errors,
     boot_time_correlation,
     displacement_errors,
+    displacement_grid,
     estimate_errors,
     estimate_lead,
     flight_figures,
@@ -152,10 +153,11 @@ def _measure(ulog: ULog, into: Flights) -> None:
     ex, ey = velocity_errors(*window)
     into.error_series += [e for e in (ex, ey) if len(e)]
     if len(ex):
-        g = np.arange(window[0][0] + 0.5, window[0][-1] - 0.5, 0.1)[: len(ex)]
+        g = displacement_grid(window[0])
         into.boot_x.append((g, ex))
         into.boot_y.append((g, ey))
     into.arrival_errors += arrival_velocity_errors(*window)
+    att = ulog.get_dataset("vehicle_attitude").data
     vertical = displacement_errors(t[air], lp["z"][air], lp["vz"][air])
     if len(vertical):
         into.vertical_series.append(vertical)
@@ -167,7 +169,6 @@ def _measure(ulog: ULog, into: Flights) -> None:
         flown = (traj.t[0], traj.t[-1])
         into.truth.append(estimate_errors(t, estimate, gt["timestamp"] / 1e6, truth, flown))
         into.lead.append(estimate_lead(t, estimate, gt["timestamp"] / 1e6, truth, flown))
-        att = ulog.get_dataset("vehicle_attitude").data
         q0, q1, q2, q3 = (att[f"q[{i}]"] for i in range(4))
         yaw = np.arctan2(2 * (q0 * q3 + q1 * q2), 1 - 2 * (q2 * q2 + q3 * q3))
         into.body.append(
@@ -176,7 +177,6 @@ def _measure(ulog: ULog, into: Flights) -> None:
             )
         )
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
-    att = ulog.get_dataset("vehicle_attitude").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
     q = np.column_stack([att[f"q[{i}]"] for i in range(4)])
     into.attitude.append(
@@ -296,8 +296,8 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
     if px4_all.truth and ours_all.truth:
         t.add_row(
             "EKF2 error against the ground truth: position / velocity std, m, m/s",
-            _truth(px4_all.truth),
-            _truth(ours_all.truth),
+            _pair_means(px4_all.truth),
+            _pair_means(ours_all.truth),
             "",
             "",
         )
@@ -311,8 +311,8 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
     if px4_all.body and ours_all.body:
         t.add_row(
             "EKF2 velocity error against the ground truth, body frame: fore-aft / sideways std, m/s",
-            _body(px4_all.body),
-            _body(ours_all.body),
+            _pair_means(px4_all.body),
+            _pair_means(ours_all.body),
             "",
             "",
         )
@@ -340,16 +340,11 @@ def _spread(values: list[float]) -> str:
     return f"{np.mean(values):.3f} ({min(values):.3f}–{max(values):.3f}, {len(values)} flights)"
 
 
-def _truth(errors: list[tuple[float, float]]) -> str:
-    pos = statistics.mean(e[0] for e in errors)
-    vel = statistics.mean(e[1] for e in errors)
-    return f"{pos:.2f} / {vel:.2f} ({len(errors)} flights)"
-
-
-def _body(errors: list[tuple[float, float]]) -> str:
-    fore = statistics.mean(e[0] for e in errors)
-    side = statistics.mean(e[1] for e in errors)
-    return f"{fore:.2f} / {side:.2f} ({len(errors)} flights)"
+def _pair_means(pairs: list[tuple[float, float]]) -> str:
+    """Per-flight pairs (position / velocity, fore-aft / sideways): each one's mean over flights."""
+    a = statistics.mean(p[0] for p in pairs)
+    b = statistics.mean(p[1] for p in pairs)
+    return f"{a:.2f} / {b:.2f} ({len(pairs)} flights)"
 
 
 def _boot(flights: Flights) -> str:

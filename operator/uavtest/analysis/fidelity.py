@@ -54,6 +54,7 @@ __all__ = [
     "boot_time_correlation",
     "compare",
     "displacement_errors",
+    "displacement_grid",
     "estimate_errors",
     "flight_figures",
     "from_liftoff",
@@ -149,8 +150,13 @@ def displacement_errors(t: np.ndarray, p: np.ndarray, v: np.ndarray, rate: float
     sampled at ``rate`` Hz over the window (empty when it is shorter than 2 s)."""
     if len(t) < 2 or t[-1] - t[0] < 2.0:
         return np.empty(0)
-    g = np.arange(t[0] + 0.5, t[-1] - 0.5, 1.0 / rate)
+    g = displacement_grid(t, rate)
     return np.interp(g, t, v) - (np.interp(g + 0.5, t, p) - np.interp(g - 0.5, t, p))
+
+
+def displacement_grid(t: np.ndarray, rate: float = 10.0) -> np.ndarray:
+    """The times ``displacement_errors`` samples at: half a second in from either end."""
+    return np.arange(t[0] + 0.5, t[-1] - 0.5, 1.0 / rate)
 
 
 def velocity_errors(
