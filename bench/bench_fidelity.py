@@ -169,13 +169,8 @@ def _measure(ulog: ULog, into: Flights) -> None:
         flown = (traj.t[0], traj.t[-1])
         into.truth.append(estimate_errors(t, estimate, gt["timestamp"] / 1e6, truth, flown))
         into.lead.append(estimate_lead(t, estimate, gt["timestamp"] / 1e6, truth, flown))
-        q0, q1, q2, q3 = (att[f"q[{i}]"] for i in range(4))
-        yaw = np.arctan2(2 * (q0 * q3 + q1 * q2), 1 - 2 * (q2 * q2 + q3 * q3))
-        into.body.append(
-            body_frame_errors(
-                t, estimate[:, 2:], gt["timestamp"] / 1e6, truth[:, 2:], att["timestamp"] / 1e6, yaw, flown
-            )
-        )
+        velocity = np.column_stack([lp["vx"], lp["vy"], lp["heading"]])
+        into.body.append(body_frame_errors(t, velocity, gt["timestamp"] / 1e6, truth[:, 2:], flown))
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
     q = np.column_stack([att[f"q[{i}]"] for i in range(4)])

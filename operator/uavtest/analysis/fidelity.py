@@ -230,22 +230,20 @@ def estimate_lead(
 
 def body_frame_errors(
     t: np.ndarray,
-    velocity: np.ndarray,
+    estimate: np.ndarray,
     t_truth: np.ndarray,
     truth: np.ndarray,
-    t_yaw: np.ndarray,
-    yaw: np.ndarray,
     window: tuple[float, float],
     rate: float = 10.0,
 ) -> tuple[float, float]:
     """The estimated horizontal velocity's error against the ground truth, turned into the body
-    frame by the heading: its standard deviation fore-aft (body x) and sideways (body y), each
-    about its mean. ``velocity``, ``truth``: (N, 2) vx, vy (NED); ``yaw`` (rad) at ``t_yaw``. PX4
-    SIH's accelerometer noise is 0.5 / 1.7 m/s^2 on the body's x / y axis (``sih.cpp``), and EKF2's
-    velocity error follows it."""
+    frame by the estimated heading: its standard deviation fore-aft (body x) and sideways (body
+    y), each about its mean. ``estimate``: (N, 3) vx, vy (NED), heading (rad), as
+    ``vehicle_local_position`` logs them; ``truth``: (M, 2) vx, vy. PX4 SIH's accelerometer noise
+    is 0.5 / 1.7 m/s^2 on the body's x / y axis (``sih.cpp``), and EKF2's velocity error follows it."""
     g = _grid(window, rate, "body-frame errors")
-    e = _errors_on(g, t, velocity, t_truth, truth, 2)
-    psi = np.interp(g, t_yaw, np.unwrap(yaw))
+    e = _errors_on(g, t, estimate, t_truth, truth, 2)
+    psi = np.interp(g, t, np.unwrap(estimate[:, 2]))
     c, s = np.cos(psi), np.sin(psi)
     fore = c * e[:, 0] + s * e[:, 1]
     side = -s * e[:, 0] + c * e[:, 1]

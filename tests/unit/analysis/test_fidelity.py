@@ -199,13 +199,13 @@ def test_body_frame_errors_turn_the_error_with_the_heading() -> None:
     yaw = np.where(t < 30.0, 0.0, np.pi / 2)  # north, then east
     c, s = np.cos(yaw), np.sin(yaw)
     truth = np.column_stack([np.full_like(t, 2.0), np.zeros_like(t)])
-    estimate = truth + np.column_stack([c * fore - s * side, s * fore + c * side])
-    got = body_frame_errors(t, estimate, t, truth, t, yaw, (0.0, 59.9))
+    estimate = np.column_stack([truth + np.column_stack([c * fore - s * side, s * fore + c * side]), yaw])
+    got = body_frame_errors(t, estimate, t, truth, (0.0, 59.9))
     assert got == (pytest.approx(fore.std(), rel=0.05), pytest.approx(side.std(), rel=0.05))
     # judged in NED instead, north and east each mix both halves: no axis stands out
     assert np.std(estimate[:, 0] - 2.0) == pytest.approx(np.std(estimate[:, 1]), rel=0.2)
     with pytest.raises(BadInput, match="empty"):
-        body_frame_errors(t, estimate, t, truth, t, yaw, (5.0, 5.0))
+        body_frame_errors(t, estimate, t, truth, (5.0, 5.0))
 
 
 def test_boot_time_correlation_tells_one_noise_realization_from_independent_ones() -> None:
