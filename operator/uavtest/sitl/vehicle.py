@@ -152,10 +152,18 @@ class Vehicle:
         self.proj = Projection(config.home.lat, config.home.lon)
         self.home_alt = config.home.alt
         # the local planner models the competition's system under test (PX4 + PX4-Avoidance in
-        # Gazebo, iris); everything else flies PX4 SIH's physics
+        # Gazebo, iris, not lockstep), calibrated with its tilt response, drag and yaw rate varying
+        # from flight to flight; everything else flies PX4 SIH's physics, which its parameters fix
+        # (SIH_KDV, ...), and yaws its setpoint at exactly MPC_YAWRAUTO_MAX (PX4 v1.15 SIH: 45
+        # degrees/s throughout a turn). The draws are made either way: a seed's others stay
+        tilt_scale, drag_scale = variation.uniform(0.9, 1.1), variation.uniform(0.93, 1.07)
+        land_jitter = variation.uniform(0.35, 0.75)  # touchdown to PX4's ground-contact conditions, s
+        yaw_rate_scale = variation.uniform(0.6, 1.0)
+        if not planner:
+            tilt_scale = drag_scale = yaw_rate_scale = 1.0
         self.body = Body(
-            tau_tilt=(TAU_TILT_GAZEBO if planner else TAU_TILT) * variation.uniform(0.9, 1.1),
-            drag_scale=variation.uniform(0.93, 1.07),
+            tau_tilt=(TAU_TILT_GAZEBO if planner else TAU_TILT) * tilt_scale,
+            drag_scale=drag_scale,
             drag=DRAG_GAZEBO_IRIS if planner else (DRAG_LINEAR, DRAG_QUADRATIC),
             delay_steps=0 if planner else round(ATTITUDE_DELAY / (STEP_US / 1e6)),
         )
@@ -174,9 +182,8 @@ class Vehicle:
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed, config.range_sensor)
-        land_jitter = variation.uniform(0.35, 0.75)  # touchdown to PX4's ground-contact conditions, s
         self.limits = Limits.of(self.params)
-        self.ctrl = Controller(self.limits, yaw_rate_scale=variation.uniform(0.6, 1.0))
+        self.ctrl = Controller(self.limits, yaw_rate_scale=yaw_rate_scale)
         self.land = LandDetector(self.params, self.ctrl, land_jitter, self.est)
         self.nav = Navigator(self.params, self.proj, self.home_alt, random.Random(f"{seed}:navigator"))
         if planner:  # PX4-Avoidance's local planner flies the auto modes' waypoints (COM_OBS_AVOID 1)

@@ -220,27 +220,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: dist_bottom logged as the land detector sees it after touchdown (0.1 m below the frozen terrain
 #: estimate, EKF2's on-ground distance, not the true 0); and for EKF2's horizontal velocity error
 #: driven by body-frame noise, larger sideways than fore-aft as SIH's accelerometer noise is
-#: (0.17 / 0.26 m/s along the body's x / y axis in 16 PX4 SIH flights) (2026-11-26, later).
+#: (0.17 / 0.26 m/s along the body's x / y axis in 16 PX4 SIH flights) (2026-11-26, later); and
+#: for PX4 SIH's body fixed by its parameters (no drag or tilt-response spread between replicas)
+#: and its yaw setpoint swept at exactly MPC_YAWRAUTO_MAX (2026-11-26, stop 21).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "26e103f00166014da3387ead8e3ec795929d599000e38dd4e73fac3b844c35c9",
-        "478fa409f3c787deafc9816de1f224dd6ded250ec0956d38e6fd16ff9a51b713",
+        "c63b45c55ef66d6324a0115e9536ce3da960b02137513c1c3d29b44e6012ebc4",
+        "c9099ba50e512273a820ab754ee9637f8f745485bece6e6edd8b15a24d4f40f0",
     ),
     "manual_and_rtl": (
-        "a2b408d29de83e19e268e994d879dae84d2704d13b9e2b3b61c7900984b40fe2",
-        "7761cc35b45b24763378a2271c5268092b7bd260ac8bb4f456f8fcfe284a12fe",
+        "10cfebdf0fc668f64f0ed091759ebcb11c5576bf24048d53c5ad0e1e0a6bcd69",
+        "005072f63368ee6ef3d654280adf9a86bc580803eef51d454566b9bf9700e5be",
     ),
     "datalink_loss": (
-        "185c0cd7bbb33b4028179bbcfb756e848a37070e1b74f4bc50af0213d0f69419",
-        "d9718569e34ef1d8ed87cd05bec2b98871750436e538c632025ceced0de902a6",
+        "4f47ca5b5dabe062170f3b0b94ae5b0807f6340e5f38ec59d85ce7a0eb2d6f5f",
+        "4d49aeecbb11994e5b69ee5ecf4b1858bf14ec00fedea18a2689837547daee07",
     ),
     "crash": (
-        "31db29568cda072cd50b012f11c184e68a0f07c3278bd2c03b80388c78886c5e",
-        "d8ff74e45d0a467d00870815c7a344fc347a096d4a2172e7fabcc82e615419e1",
+        "86b80881e632db1743a7f09a3d9e4af2663be828a86532910e12e4dd0a67fca2",
+        "4d196eea4abcf7d80f27dfd72d98140334c0306eb1846b1f33fe34b67a279d48",
     ),
     "params_and_commands": (
-        "2a12c342d31745f2114c58fa875e54520c5a921e54096fb56c159877f515a99f",
-        "55cf0bab630e492f402d4d305cd3b1ab09c34401ffabdc1f1a87901246412f70",
+        "a5d3a3eea48d57b81bdc391cae555af0c77e6f01c64afa0a2b1bb88c30a589c1",
+        "19db7e2fbaa860e86268321741f93c4af237a0f861d3c20166f8ca3639f8fffc",
     ),
 }
 
