@@ -374,16 +374,27 @@ class Controller:
         self.dvy += a * ((vy - self.vy_prev) / dt - self.dvy)
         self.vx_prev, self.vy_prev = vx, vy
 
-    def _xy_loops(self, dt: float, x: float, y: float, vx: float, vy: float) -> tuple[float, float]:
+    def _xy_loops(
+        self, dt: float, x: float, y: float, vx: float, vy: float, az: float = 0.0
+    ) -> tuple[float, float]:
         lim = self.lim
         # the trajectory's velocity is fed forward unstretched (PositionSmoothing's output)
         vcx = self.vx + lim.xy_p * (self.px - x)
         vcy = self.vy + lim.xy_p * (self.py - y)
         evx, evy = vcx - vx, vcy - vy
+        eix, eiy = evx, evy
+        if az > 0.0:
+            # PositionControl's tracking anti-windup: it judges the horizontal acceleration its
+            # thrust gives as (g - az) / g of the command (decoupled; the hover thrust estimate
+            # cancels out), so a downward vertical setpoint -- the estimate above the true hover
+            # thrust -- bleeds the integrator by 2 / MPC_XY_VEL_P_ACC of the shortfall
+            k = 2.0 / lim.vxy_p * az / GRAVITY
+            eix -= k * (lim.vxy_p * evx + self.ix - lim.vxy_d * self.dvx + self.ax)
+            eiy -= k * (lim.vxy_p * evy + self.iy - lim.vxy_d * self.dvy + self.ay)
         # the integrator holds the drag (SIH_KDV); PX4 bounds it only by tracking anti-windup
         imax = GRAVITY * math.tan(lim.tilt_max)
-        self.ix = max(-imax, min(imax, self.ix + lim.vxy_i * evx * dt))
-        self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * evy * dt))
+        self.ix = max(-imax, min(imax, self.ix + lim.vxy_i * eix * dt))
+        self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * eiy * dt))
         # PositionControl::_velocityControl: P + I - D on the velocity's derivative, plus the
         # trajectory's acceleration fed forward
         return (
@@ -398,6 +409,12 @@ class Controller:
         # PX4 SIH climbs at ~90 % of the setpoint for seconds: a slow thrust integrator
         self.iz = max(-4.0, min(4.0, self.iz + Z_I_SCALE * lim.vz_i * e * dt))
         return lim.vz_p * e + self.iz
+
+    def update_hover_thrust(self, previous: float, new: float) -> None:
+        """``PositionControl::updateHoverThrust``: the vertical integrator takes up the change, so
+        the thrust is the same before and after the new hover thrust estimate."""
+        az = self.acc_sp[2]
+        self.iz += (az - GRAVITY) * previous / new + GRAVITY - az
 
     def _z_reference(self, dt: float, tz: float) -> None:
         lim = self.lim
@@ -464,8 +481,8 @@ class Controller:
                 d = math.hypot(tx - x, ty - y)
                 if d >= acc_rad:
                     target_yaw = math.atan2(ty - y, tx - x)
-            ax, ay = self._xy_loops(dt, x, y, vx, vy)
             az = self._z_loops(dt, z, vz, True)
+            ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         elif kind is GoalKind.TAKEOFF:
             self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad)
             self.ramp += dt
@@ -484,8 +501,8 @@ class Controller:
                 d = math.hypot(goal.x - x, goal.y - y)
                 if d > lim.acc_rad:
                     target_yaw = math.atan2(goal.y - y, goal.x - x)
-            ax, ay = self._xy_loops(dt, x, y, vx, vy)
             az = self._z_loops(dt, z, vz, False)
+            ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         elif kind is GoalKind.LAND:
             self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad)
             # FlightTaskAuto's _dist_to_ground: the range finder's distance (SIH has one) when
@@ -513,8 +530,8 @@ class Controller:
             # descent from 10 m takes ~14 s, not the ~18 s of velocity control alone)
             self.pz += self.vz * dt
             target_yaw = goal.yaw
-            ax, ay = self._xy_loops(dt, x, y, vx, vy)
             az = self._z_loops(dt, z, vz, True)
+            ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         elif kind is GoalKind.OFFBOARD:
             return self._offboard(dt, goal, x, y, z, vx, vy, vz, yaw)
         else:

@@ -116,6 +116,13 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "MPC_HOLD_DZ": (FLOAT, 0.1),
     "MC_ORBIT_RAD_MAX": (FLOAT, 1000.0),
     "MPC_THR_HOVER": (FLOAT, 0.5),
+    "MPC_USE_HTE": (INT, 1),
+    # hover thrust estimator (mc_hover_thrust_estimator)
+    "HTE_HT_NOISE": (FLOAT, 0.0036),
+    "HTE_ACC_GATE": (FLOAT, 3.0),
+    "HTE_HT_ERR_INIT": (FLOAT, 0.1),
+    "HTE_VXY_THR": (FLOAT, 10.0),
+    "HTE_VZ_THR": (FLOAT, 2.0),
     "MPC_POS_MODE": (INT, 4),
     "MPC_HOLD_MAX_XY": (FLOAT, 0.8),
     "MPC_JERK_MAX": (FLOAT, 8.0),

@@ -6,7 +6,8 @@ One object on the vehicle (``Vehicle.sim``) so that the vehicle keeps few instan
 (blocked motors and their tumble), ``failure_detector`` (commander/failure_detector),
 ``range_sensor`` (the simulated obstacle-distance sensor, None without one) and ``faulty``: a
 failure was injected, so the per-tick failure paths run from then on; ``planner``: PX4-Avoidance's
-local planner with its depth camera when the test flies with it (else None).
+local planner with its depth camera when the test flies with it (else None); ``hover_thrust``:
+PX4's hover thrust estimator (mc_hover_thrust_estimator) with SIH's physics (else None).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import random
 from uavtest.sitl.battery_simulator import BatterySimulator
 from uavtest.sitl.commander.failure_detector import FailureDetector, FailureInjector
 from uavtest.sitl.local_planner import LocalPlanner
+from uavtest.sitl.mc_hover_thrust_estimator import HoverThrustEstimator
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.sensor_gps_sim import GpsSimulator
 from uavtest.sitl.sensor_obstacle_distance_sim import ObstacleDistanceSim
@@ -31,6 +33,7 @@ class Simulation:
         "failure_injector",
         "faulty",
         "gps",
+        "hover_thrust",
         "planner",
         "range_sensor",
     )
@@ -43,3 +46,6 @@ class Simulation:
         self.faulty = False
         self.range_sensor = ObstacleDistanceSim(range_sensor) if range_sensor is not None else None
         self.planner: LocalPlanner | None = None
+        #: PX4's hover thrust estimator, when the vehicle flies SIH's physics (else None: the
+        #: local planner's system was calibrated without it)
+        self.hover_thrust: HoverThrustEstimator | None = None

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from uavtest.spec.models import Obstacle, Wind
 
-__all__ = ["GRAVITY", "Body", "Box", "WindModel", "World"]
+__all__ = ["GRAVITY", "HOVER_THRUST", "Body", "Box", "WindModel", "World"]
 
 GRAVITY = 9.80665
 #: PX4 SIH's attitude response: in all nine shared SIH logs the body's tilt (vehicle_attitude)
@@ -37,6 +37,8 @@ DRAG_QUADRATIC = 0.0  # 1/m: SIH has none
 #: quadratic 1/m) as calibrated against the competition's own local-planner flights
 DRAG_GAZEBO_IRIS = (0.15, 0.06)
 DRAG_VERTICAL = 0.8  # 1/s
+#: the collective thrust (0..1) that holds SIH's quadrotor up: SIH_MASS * g / (4 * SIH_T_MAX)
+HOVER_THRUST = 1.0 * 9.80665 / (4 * 5.0)
 LIFTOFF_ACC = 3.0  # m/s^2 of net upward thrust needed to leave the ground (PX4 SIH lifts off late)
 NEAR_MARGIN = 8.0  # m: boxes within this of the vehicle are checked every physics step
 

@@ -34,6 +34,7 @@ __all__ = [
     "FailureDetectorStatus",
     "GeofenceResult",
     "HomePosition",
+    "HoverThrustEstimate",
     "ManualControlSetpoint",
     "MissionResult",
     "ObstacleDistance",
@@ -392,6 +393,22 @@ class VehicleLocalPositionSetpoint:
     thrust: tuple[float, float, float] = ulog("float[3]")
     yaw: float = ulog("float")
     yawspeed: float = ulog("float")
+
+
+@topic("hover_thrust_estimate")
+@dataclass(slots=True)
+class HoverThrustEstimate:
+    """PX4 msg/HoverThrustEstimate.msg: mc_hover_thrust_estimator's state and its last fusion."""
+
+    timestamp: int = ulog("uint64_t")
+    timestamp_sample: int = ulog("uint64_t")
+    hover_thrust: float = ulog("float")
+    hover_thrust_var: float = ulog("float")
+    accel_innov: float = ulog("float")
+    accel_innov_var: float = ulog("float")
+    accel_innov_test_ratio: float = ulog("float")
+    accel_noise_var: float = ulog("float")
+    valid: bool = ulog("bool")
 
 
 @topic("offboard_control_mode")

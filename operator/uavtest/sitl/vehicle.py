@@ -45,6 +45,7 @@ from uavtest.sitl.local_planner import LocalPlanner, PlannerParams
 from uavtest.sitl.mav import LandedState, MavSeverity, Msg, ParamType
 from uavtest.sitl.mavlink_io import custom_mode_name
 from uavtest.sitl.mavlink_streams import ORBIT_STATUS_HZ, STREAMS, SW_VERSION, orbit_execution_status
+from uavtest.sitl.mc_hover_thrust_estimator import HoverThrustEstimator
 from uavtest.sitl.mc_pos_control import IDLE, Controller, Goal, GoalKind, Limits
 from uavtest.sitl.mission import NavItem
 from uavtest.sitl.navigator import EventKind, Navigator, State
@@ -59,7 +60,9 @@ from uavtest.sitl.simulator_sih import (
     DRAG_GAZEBO_IRIS,
     DRAG_LINEAR,
     DRAG_QUADRATIC,
+    DRAG_VERTICAL,
     GRAVITY,
+    HOVER_THRUST,
     TAU_TILT,
     TAU_TILT_GAZEBO,
     Body,
@@ -182,6 +185,8 @@ class Vehicle:
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed, config.range_sensor)
+        if not planner:
+            self.sim.hover_thrust = HoverThrustEstimator(self.params)
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=yaw_rate_scale)
         self.land = LandDetector(self.params, self.ctrl, land_jitter, self.est)
@@ -474,6 +479,24 @@ class Vehicle:
 
     # ------------------------------------------------------------------ 50 Hz
 
+    def _thrust(
+        self, hte: HoverThrustEstimator, dt: float, cax: float, cay: float, caz: float
+    ) -> tuple[float, float, float]:
+        """SIH's motors under PositionControl's acceleration setpoint: PX4 turns it into thrust
+        with its hover thrust (``hte.used``), SIH lifts with the true one (``HOVER_THRUST``); the
+        hover thrust estimator then learns from the vertical acceleration it measures."""
+        lift = hte.used / HOVER_THRUST * (GRAVITY - caz)
+        b = self.body
+        # the vertical acceleration it measures, up: none while the ground holds the body
+        acc_up = 0.0 if b.on_ground else DRAG_VERTICAL * b.vz - b.az
+        thrust_up = hte.used * (GRAVITY - caz) / GRAVITY
+        valid = hte.update(dt, acc_up, thrust_up, b.vz, math.hypot(b.vx, b.vy), -b.z, self.land.landed)
+        if valid and self.params["MPC_USE_HTE"] and hte.hover != hte.used:
+            previous, hte.used = hte.used, hte.hover
+            self.ctrl.update_hover_thrust(previous, hte.used)
+        s = lift / GRAVITY
+        return cax * s, cay * s, GRAVITY - lift
+
     def _control_tick(self, t: int) -> None:
         dt = CONTROL_DT
         # SIH's range finder reads below its minimum on the ground: EKF2 fuses it again only
@@ -512,6 +535,9 @@ class Vehicle:
                 dt, goal, st.x, st.y, st.z, b.vx + e.evx, b.vy + e.evy, b.vz + e.evz, st.yaw
             )
             self.ctrl.acc_sp = (cax, cay, caz)  # logged as vehicle_local_position_setpoint
+            hte = sim.hover_thrust
+            if hte is not None:
+                cax, cay, caz = self._thrust(hte, dt, cax, cay, caz)
             # the attitude controller tilts the *estimated* body: with EKF2's heading off by eh,
             # the real thrust leans eh the other way (PX4 SIH: 2-5 degrees on a leg)
             c, s = math.cos(e.eh), math.sin(e.eh)
@@ -521,6 +547,8 @@ class Vehicle:
             self._cmd = IDLE
             b.motors = False
             self.ctrl.reset(st.x, st.y, st.z, 0.0, 0.0, 0.0, st.yaw)
+            if sim.hover_thrust is not None:
+                sim.hover_thrust.reset()
         if cp is not None and cp.fused is not None:
             self._cp_outputs(t, cp)  # type: ignore[arg-type]
         if faulty and sim.failure_injector.esc_blocked:
@@ -821,9 +849,18 @@ class Vehicle:
             )
             if self.commander.armed:
                 # PositionControl's output: the acceleration setpoint (NED, 0 in a hover) and
-                # the thrust normalised by MPC_THR_HOVER, as PX4 converts one into the other
+                # the thrust normalised by its hover thrust (the estimate's once valid, else
+                # MPC_THR_HOVER), as PX4 converts one into the other
                 ax, ay, az = c.acc_sp
-                h = self.params["MPC_THR_HOVER"] / GRAVITY
+                hte = self.sim.hover_thrust
+                h = (hte.used if hte is not None else self.params["MPC_THR_HOVER"]) / GRAVITY
+                if hte is not None:
+                    rec.data(
+                        topics.HoverThrustEstimate(
+                            t, t, hte.hover, hte.variance, hte.innov, hte.innov_var, hte.ratio,
+                            hte.accel_noise_var, hte.valid,
+                        )
+                    )  # fmt: skip
                 rec.data(
                     topics.VehicleLocalPositionSetpoint(
                         t,

@@ -222,27 +222,30 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: driven by body-frame noise, larger sideways than fore-aft as SIH's accelerometer noise is
 #: (0.17 / 0.26 m/s along the body's x / y axis in 16 PX4 SIH flights) (2026-11-26, later); and
 #: for PX4 SIH's body fixed by its parameters (no drag or tilt-response spread between replicas)
-#: and its yaw setpoint swept at exactly MPC_YAWRAUTO_MAX (2026-11-26, stop 21).
+#: and its yaw setpoint swept at exactly MPC_YAWRAUTO_MAX (2026-11-26, stop 21); and for PX4's
+#: hover thrust estimator (mc_hover_thrust_estimator: SIH's thrust against the estimate
+#: PositionControl flies with, PositionControl's horizontal anti-windup, the
+#: hover_thrust_estimate topic and HTE_* / MPC_USE_HTE in the parameter list) (2026-11-26, stop 21).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "c63b45c55ef66d6324a0115e9536ce3da960b02137513c1c3d29b44e6012ebc4",
-        "c9099ba50e512273a820ab754ee9637f8f745485bece6e6edd8b15a24d4f40f0",
+        "df0806e25b65967f6a66ae7eaabf4950233f13775a315b3873945dbd02d299c9",
+        "c871f7c77c8fb69d6c96bfa19edaa0fc8f782a37137ae7a502edaee74dc6351d",
     ),
     "manual_and_rtl": (
-        "10cfebdf0fc668f64f0ed091759ebcb11c5576bf24048d53c5ad0e1e0a6bcd69",
-        "005072f63368ee6ef3d654280adf9a86bc580803eef51d454566b9bf9700e5be",
+        "16e722ebfa179894a98ccaa7ce0c6eb5e1c247f38132e69aec3a63ac5589e585",
+        "509936ae0b4180a1961e83adee01f8556d64839be298ac4078ba36f8a323c1dc",
     ),
     "datalink_loss": (
-        "4f47ca5b5dabe062170f3b0b94ae5b0807f6340e5f38ec59d85ce7a0eb2d6f5f",
-        "4d49aeecbb11994e5b69ee5ecf4b1858bf14ec00fedea18a2689837547daee07",
+        "1a0dca8e7e71b0f7525449dffe6af83b98e45ce9d356bc278a183bec312092fd",
+        "756c915fb50f3da48110db2997bb7913f419ca17eeb89617b84a57652fb89670",
     ),
     "crash": (
-        "86b80881e632db1743a7f09a3d9e4af2663be828a86532910e12e4dd0a67fca2",
-        "4d196eea4abcf7d80f27dfd72d98140334c0306eb1846b1f33fe34b67a279d48",
+        "e192cef0f189e94ffa177d6ad7152cca42e5ff45f20ca79cfdcd46fa8933dfd4",
+        "bb467346c02943f50092b58516369060fb798c74360479a66b7e03f30b7a7cd5",
     ),
     "params_and_commands": (
-        "a5d3a3eea48d57b81bdc391cae555af0c77e6f01c64afa0a2b1bb88c30a589c1",
-        "19db7e2fbaa860e86268321741f93c4af237a0f861d3c20166f8ca3639f8fffc",
+        "435a74115e746b5a0f8d39ee8635d1d410375e7d179486bbedffe4667c97298d",
+        "3f96d5a5da6257f1a45b43cc5dede2574fd2782b7c8266ae35242161fa05e69c",
     ),
 }
 

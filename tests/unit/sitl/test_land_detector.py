@@ -163,9 +163,11 @@ def _touchdown_with_shift(shift: float):
     touchdown = v.time_us
     stages: dict[str, float] = {}
 
-    def landed(v) -> bool:
+    def landed(v) -> bool:  # each stage's last rise: a brief contact at touchdown starts over
         for name in ("ground_contact", "maybe_landed"):
-            if getattr(v, name) and name not in stages:
+            if not getattr(v, name):
+                stages.pop(name, None)
+            elif name not in stages:
                 stages[name] = v.time_us
         return v.landed
 
