@@ -871,7 +871,13 @@ class Vehicle:
                         c.vy,
                         c.vz,
                         (ax, ay, az),
-                        (ax * h, ay * h, (az - GRAVITY) * h),
+                        # decoupled: tilted by the horizontal acceleration against g alone,
+                        # then scaled so its vertical part is the vertical setpoint's
+                        (
+                            ax * h * (GRAVITY - az) / GRAVITY,
+                            ay * h * (GRAVITY - az) / GRAVITY,
+                            (az - GRAVITY) * h,
+                        ),
                         c.yaw_sp,
                         c.yawrate_sp,
                     )

@@ -225,26 +225,27 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: and its yaw setpoint swept at exactly MPC_YAWRAUTO_MAX (2026-11-26, stop 21); and for PX4's
 #: hover thrust estimator (mc_hover_thrust_estimator: SIH's thrust against the estimate
 #: PositionControl flies with, PositionControl's horizontal anti-windup, the
-#: hover_thrust_estimate topic and HTE_* / MPC_USE_HTE in the parameter list) (2026-11-26, stop 21).
+#: hover_thrust_estimate topic, HTE_* / MPC_USE_HTE in the parameter list and the thrust setpoint's
+#: horizontal part scaled as PX4's decoupled one) (2026-11-26, stop 21).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "df0806e25b65967f6a66ae7eaabf4950233f13775a315b3873945dbd02d299c9",
+        "71091b16db72c3c7042367743df2b6a7fdf3f33112575fa8771f3b70c0757ff4",
         "c871f7c77c8fb69d6c96bfa19edaa0fc8f782a37137ae7a502edaee74dc6351d",
     ),
     "manual_and_rtl": (
-        "16e722ebfa179894a98ccaa7ce0c6eb5e1c247f38132e69aec3a63ac5589e585",
+        "8f31e553a8498a8f300de5be8a4eafd65ab6decd5429bab323f837c529b967af",
         "509936ae0b4180a1961e83adee01f8556d64839be298ac4078ba36f8a323c1dc",
     ),
     "datalink_loss": (
-        "1a0dca8e7e71b0f7525449dffe6af83b98e45ce9d356bc278a183bec312092fd",
+        "96375a63b0aabb342c131a3fbc4b3a1b95d158076a1072d8c4d2b2abdc3954de",
         "756c915fb50f3da48110db2997bb7913f419ca17eeb89617b84a57652fb89670",
     ),
     "crash": (
-        "e192cef0f189e94ffa177d6ad7152cca42e5ff45f20ca79cfdcd46fa8933dfd4",
+        "349929acc900218c29f6b19a0758402575864101e53a065c2d7a90e95e81f269",
         "bb467346c02943f50092b58516369060fb798c74360479a66b7e03f30b7a7cd5",
     ),
     "params_and_commands": (
-        "435a74115e746b5a0f8d39ee8635d1d410375e7d179486bbedffe4667c97298d",
+        "2d73982e6f9a0507cebc6c45b26a3054826a263695e1c6aa24f241c97639b125",
         "3f96d5a5da6257f1a45b43cc5dede2574fd2782b7c8266ae35242161fa05e69c",
     ),
 }
