@@ -637,7 +637,7 @@ class Controller:
                 self.py += self.vy * dt
             else:
                 self.px, self.py = x + self.vx * 0.2, y + self.vy * 0.2
-        ax, ay = self._xy_loops(dt, x, y, vx, vy)
+        ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
         return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), self.yawrate_sp
 

@@ -226,15 +226,16 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: hover thrust estimator (mc_hover_thrust_estimator: SIH's thrust against the estimate
 #: PositionControl flies with, PositionControl's horizontal anti-windup, the
 #: hover_thrust_estimate topic, HTE_* / MPC_USE_HTE in the parameter list and the thrust setpoint's
-#: horizontal part scaled as PX4's decoupled one) (2026-11-26, stop 21).
+#: horizontal part scaled as PX4's decoupled one; the anti-windup in position mode too) (2026-11-26,
+#: stop 21).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
         "71091b16db72c3c7042367743df2b6a7fdf3f33112575fa8771f3b70c0757ff4",
         "c871f7c77c8fb69d6c96bfa19edaa0fc8f782a37137ae7a502edaee74dc6351d",
     ),
     "manual_and_rtl": (
-        "8f31e553a8498a8f300de5be8a4eafd65ab6decd5429bab323f837c529b967af",
-        "509936ae0b4180a1961e83adee01f8556d64839be298ac4078ba36f8a323c1dc",
+        "65428e56455bcacb566e5df5bd52ed0cb03e4a875da11148a942ae21f8f283ff",
+        "39f53f7a35a114cbe2f1044efe323faedc508024786915d0a88fc19982fb2472",
     ),
     "datalink_loss": (
         "96375a63b0aabb342c131a3fbc4b3a1b95d158076a1072d8c4d2b2abdc3954de",
