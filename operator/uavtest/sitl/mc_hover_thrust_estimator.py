@@ -23,10 +23,10 @@ leg more slowly than its trajectory (``mc_pos_control``).
 from __future__ import annotations
 
 from uavtest.sitl.params import ParamStore
+from uavtest.sitl.simulator_sih import GRAVITY
 
 __all__ = ["HoverThrustEstimator"]
 
-GRAVITY = 9.80665
 VALID_VARIANCE = 0.001  # thrust^2: MulticopterHoverThrustEstimator's validity threshold
 IN_AIR_HEIGHT = 1.0  # m: the distance to the ground that starts the estimation after takeoff
 LPF_TIME_CONSTANT = 1.0  # s: ZeroOrderHoverThrustEkf::_lpf_time_constant

@@ -382,25 +382,23 @@ class Controller:
         vcx = self.vx + lim.xy_p * (self.px - x)
         vcy = self.vy + lim.xy_p * (self.py - y)
         evx, evy = vcx - vx, vcy - vy
-        eix, eiy = evx, evy
+        # PositionControl::_velocityControl: P + I - D on the velocity's derivative, plus the
+        # trajectory's acceleration fed forward; here all but the integrator
+        pdx = lim.vxy_p * evx - lim.vxy_d * self.dvx + self.ax
+        pdy = lim.vxy_p * evy - lim.vxy_d * self.dvy + self.ay
         if az > 0.0:
-            # PositionControl's tracking anti-windup: it judges the horizontal acceleration its
-            # thrust gives as (g - az) / g of the command (decoupled; the hover thrust estimate
-            # cancels out), so a downward vertical setpoint -- the estimate above the true hover
-            # thrust -- bleeds the integrator by 2 / MPC_XY_VEL_P_ACC of the shortfall
+            # its tracking anti-windup judges the horizontal acceleration the thrust gives as
+            # (g - az) / g of the command (decoupled; the hover thrust estimate cancels out), so a
+            # downward vertical setpoint -- the estimate above the true hover thrust -- bleeds the
+            # integrator by 2 / MPC_XY_VEL_P_ACC of the shortfall
             k = 2.0 / lim.vxy_p * az / GRAVITY
-            eix -= k * (lim.vxy_p * evx + self.ix - lim.vxy_d * self.dvx + self.ax)
-            eiy -= k * (lim.vxy_p * evy + self.iy - lim.vxy_d * self.dvy + self.ay)
+            evx -= k * (pdx + self.ix)
+            evy -= k * (pdy + self.iy)
         # the integrator holds the drag (SIH_KDV); PX4 bounds it only by tracking anti-windup
         imax = GRAVITY * math.tan(lim.tilt_max)
-        self.ix = max(-imax, min(imax, self.ix + lim.vxy_i * eix * dt))
-        self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * eiy * dt))
-        # PositionControl::_velocityControl: P + I - D on the velocity's derivative, plus the
-        # trajectory's acceleration fed forward
-        return (
-            lim.vxy_p * evx + self.ix - lim.vxy_d * self.dvx + self.ax,
-            lim.vxy_p * evy + self.iy - lim.vxy_d * self.dvy + self.ay,
-        )
+        self.ix = max(-imax, min(imax, self.ix + lim.vxy_i * evx * dt))
+        self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * evy * dt))
+        return pdx + self.ix, pdy + self.iy
 
     def _z_loops(self, dt: float, z: float, vz: float, position: bool) -> float:
         lim = self.lim

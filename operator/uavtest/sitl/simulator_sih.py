@@ -38,7 +38,7 @@ DRAG_QUADRATIC = 0.0  # 1/m: SIH has none
 DRAG_GAZEBO_IRIS = (0.15, 0.06)
 DRAG_VERTICAL = 0.8  # 1/s
 #: the collective thrust (0..1) that holds SIH's quadrotor up: SIH_MASS * g / (4 * SIH_T_MAX)
-HOVER_THRUST = 1.0 * 9.80665 / (4 * 5.0)
+HOVER_THRUST = 1.0 * GRAVITY / (4 * 5.0)
 LIFTOFF_ACC = 3.0  # m/s^2 of net upward thrust needed to leave the ground (PX4 SIH lifts off late)
 NEAR_MARGIN = 8.0  # m: boxes within this of the vehicle are checked every physics step
 

@@ -230,24 +230,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: stop 21).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "71091b16db72c3c7042367743df2b6a7fdf3f33112575fa8771f3b70c0757ff4",
-        "c871f7c77c8fb69d6c96bfa19edaa0fc8f782a37137ae7a502edaee74dc6351d",
+        "047a5abbeef7aecd1e0af1e7e8c9c4b6895a9dba116dffa44aecbec0e2ca0140",
+        "ced0d38f5987a7841b997f88b29e781f4baf19143e9d08d70a2a391f33ed4e62",
     ),
     "manual_and_rtl": (
         "65428e56455bcacb566e5df5bd52ed0cb03e4a875da11148a942ae21f8f283ff",
-        "39f53f7a35a114cbe2f1044efe323faedc508024786915d0a88fc19982fb2472",
+        "495a2aae07e501ca0bf616e32f4ebc5768f19596788009d14c6ab504bf9a7d6b",
     ),
     "datalink_loss": (
         "96375a63b0aabb342c131a3fbc4b3a1b95d158076a1072d8c4d2b2abdc3954de",
-        "756c915fb50f3da48110db2997bb7913f419ca17eeb89617b84a57652fb89670",
+        "1552bc85edf597e0eeafc091066ee4bebf99e12a17ad0a9ad2f0441bd89226c0",
     ),
     "crash": (
         "349929acc900218c29f6b19a0758402575864101e53a065c2d7a90e95e81f269",
-        "bb467346c02943f50092b58516369060fb798c74360479a66b7e03f30b7a7cd5",
+        "8b8e84f6ddf89ace3dd3c0225849a02305570cf7e162c7348c770a1856ea105e",
     ),
     "params_and_commands": (
         "2d73982e6f9a0507cebc6c45b26a3054826a263695e1c6aa24f241c97639b125",
-        "3f96d5a5da6257f1a45b43cc5dede2574fd2782b7c8266ae35242161fa05e69c",
+        "6c364e72dfefd52f653c5a3527ba02f78b5cd43c5d13c1ec75c93ad62746811e",
     ),
 }
 
