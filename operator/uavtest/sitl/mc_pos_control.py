@@ -381,9 +381,13 @@ class Controller:
         # the trajectory's velocity is fed forward unstretched (PositionSmoothing's output)
         vcx = self.vx + lim.xy_p * (self.px - x)
         vcy = self.vy + lim.xy_p * (self.py - y)
-        evx, evy = vcx - vx, vcy - vy
-        # PositionControl::_velocityControl: P + I - D on the velocity's derivative, plus the
-        # trajectory's acceleration fed forward; here all but the integrator
+        return self._velocity_pid(dt, vcx - vx, vcy - vy, az)
+
+    def _velocity_pid(self, dt: float, evx: float, evy: float, az: float) -> tuple[float, float]:
+        """``PositionControl::_velocityControl`` horizontally, from the velocity error (NED)."""
+        lim = self.lim
+        # P + I - D on the velocity's derivative, plus the trajectory's acceleration fed
+        # forward; here all but the integrator
         pdx = lim.vxy_p * evx - lim.vxy_d * self.dvx + self.ax
         pdy = lim.vxy_p * evy - lim.vxy_d * self.dvy + self.ay
         if az > 0.0:
@@ -571,16 +575,8 @@ class Controller:
         self.vx, self.vy, self.vz = cx, cy, cz
         self.ax = self.ay = 0.0
         self.stretch = 1.0
-        evx, evy = cx - vx, cy - vy
-        imax = GRAVITY * math.tan(lim.tilt_max)
-        self.ix = max(-imax, min(imax, self.ix + lim.vxy_i * evx * dt))
-        self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * evy * dt))
-        ax, ay = self._limit_tilt(
-            lim.vxy_p * evx + self.ix - lim.vxy_d * self.dvx,
-            lim.vxy_p * evy + self.iy - lim.vxy_d * self.dvy,
-            lim.tilt_max,
-        )
         az = self._z_loops(dt, z, vz, False)
+        ax, ay = self._limit_tilt(*self._velocity_pid(dt, cx - vx, cy - vy, az), lim.tilt_max)
         if goal.yawspeed == goal.yawspeed and goal.yaw != goal.yaw:
             self.yaw_sp = yaw
             self.yawrate_sp = goal.yawspeed
