@@ -277,6 +277,11 @@ class Controller:
         self.xy_locked = False
         #: the last acceleration command (NED, 0 in a hover: ``update``'s), set by the vehicle for the log
         self.acc_sp = (0.0, 0.0, 0.0)
+        #: PositionControl's velocity setpoint ``_vel_sp`` (NED) as the velocity loops last used
+        #: it: the trajectory's velocity plus MPC_XY_P / MPC_Z_P times the position error, NaN on
+        #: an axis without velocity control (altitude and manual modes); logged as
+        #: vehicle_local_position_setpoint.vx/vy/vz
+        self.vsx = self.vsy = self.vsz = math.nan
 
     def reset(self, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float) -> None:
         """Restart the reference at the vehicle's state (mode switch, arming)."""
@@ -381,6 +386,7 @@ class Controller:
         # the trajectory's velocity is fed forward unstretched (PositionSmoothing's output)
         vcx = self.vx + lim.xy_p * (self.px - x)
         vcy = self.vy + lim.xy_p * (self.py - y)
+        self.vsx, self.vsy = vcx, vcy
         return self._velocity_pid(dt, vcx - vx, vcy - vy, az)
 
     def _velocity_pid(self, dt: float, evx: float, evy: float, az: float) -> tuple[float, float]:
@@ -407,6 +413,7 @@ class Controller:
     def _z_loops(self, dt: float, z: float, vz: float, position: bool) -> float:
         lim = self.lim
         vzc = self.vz + (lim.z_p * (self.pz - z) if position else 0.0)
+        self.vsz = vzc
         e = vzc - vz
         # PX4 SIH climbs at ~90 % of the setpoint for seconds: a slow thrust integrator
         self.iz = max(-4.0, min(4.0, self.iz + Z_I_SCALE * lim.vz_i * e * dt))
@@ -576,6 +583,7 @@ class Controller:
         self.ax = self.ay = 0.0
         self.stretch = 1.0
         az = self._z_loops(dt, z, vz, False)
+        self.vsx, self.vsy = cx, cy
         ax, ay = self._limit_tilt(*self._velocity_pid(dt, cx - vx, cy - vy, az), lim.tilt_max)
         if goal.yawspeed == goal.yawspeed and goal.yaw != goal.yaw:
             self.yaw_sp = yaw
@@ -603,6 +611,7 @@ class Controller:
             bx, by = GRAVITY * math.tan(sx * lim.man_tilt_max), GRAVITY * math.tan(sy * lim.man_tilt_max)
             az = -(sz / 0.5 - 1.0) * GRAVITY
             self.reset(x, y, z, vx, vy, vz, yaw)
+            self.vsx = self.vsy = self.vsz = math.nan  # no velocity control: PX4 logs none
             return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(GRAVITY, az)), self.yawrate_sp
         # climb rate (altitude and position mode)
         self.vz = -climb * (lim.z_up if climb > 0 else lim.z_down)
@@ -615,6 +624,7 @@ class Controller:
         if goal.kind is GoalKind.ALTITUDE:
             bx, by = GRAVITY * math.tan(sx * lim.man_tilt_max), GRAVITY * math.tan(sy * lim.man_tilt_max)
             self.px, self.py, self.vx, self.vy = x, y, vx, vy
+            self.vsx = self.vsy = math.nan  # tilt from the sticks: no horizontal velocity control
             return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(0.8 * GRAVITY, az)), self.yawrate_sp
         # position mode: sticks are a body-frame velocity
         bvx, bvy = sx * lim.vel_manual, sy * lim.vel_manual

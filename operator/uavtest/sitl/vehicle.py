@@ -867,9 +867,9 @@ class Vehicle:
                         c.px,
                         c.py,
                         c.pz,
-                        c.vx,
-                        c.vy,
-                        c.vz,
+                        c.vsx,
+                        c.vsy,
+                        c.vsz,
                         (ax, ay, az),
                         # decoupled: tilted by the horizontal acceleration against g alone,
                         # then scaled so its vertical part is the vertical setpoint's

@@ -74,3 +74,39 @@ def test_the_tilt_follows_the_thrust_setpoint_as_late_as_px4_sihs(shared_data: P
     ours = _attitude_response(ULog(io.BytesIO(sink.logs[0])))
     assert ours.delay == pytest.approx(px4.delay, abs=0.03), (ours, px4)
     assert ours.tau == pytest.approx(px4.tau, abs=0.03), (ours, px4)
+
+
+def _velocity_setpoint_residuals(ulog: ULog) -> tuple[np.ndarray, np.ndarray]:
+    """|logged velocity setpoint − (trajectory velocity + MPC_XY_P × position error)| and
+    |logged velocity setpoint − trajectory velocity|, horizontally, where a setpoint is logged."""
+    lp = ulog.get_dataset("vehicle_local_position").data
+    traj = ulog.get_dataset("trajectory_setpoint").data
+    sp = ulog.get_dataset("vehicle_local_position_setpoint").data
+    t, tt, ts = lp["timestamp"] / 1e6, traj["timestamp"] / 1e6, sp["timestamp"] / 1e6
+    xy_p = ulog.initial_parameters.get("MPC_XY_P", 0.95)
+    p_law, feedforward = [], []
+    for i, axis in enumerate("xy"):
+        logged = sp[f"v{axis}"]
+        valid = np.isfinite(logged)
+        velocity = np.interp(ts, tt, traj[f"velocity[{i}]"])
+        error = np.interp(ts, tt, traj[f"position[{i}]"]) - np.interp(ts, t, lp[axis])
+        p_law.append(np.abs(logged - velocity - xy_p * error)[valid])
+        feedforward.append(np.abs(logged - velocity)[valid])
+    return np.concatenate(p_law), np.concatenate(feedforward)
+
+
+def test_the_logged_velocity_setpoint_is_position_controls_as_px4_logs_it(shared_data: Path):
+    """PX4 v1.15 logs PositionControl's ``_vel_sp`` in vehicle_local_position_setpoint: the
+    trajectory's velocity plus MPC_XY_P times the position error, not the trajectory's velocity
+    (Flight Review plots it against the estimate). The shared PX4 SIH log obeys that law within
+    a few cm/s (topic timing); the built-in vehicle's log obeys it, and the P term is visible."""
+    px4_law, px4_ff = _velocity_setpoint_residuals(
+        read_ulog(shared_data / "px4-sih" / "competition-mission2-run1.ulg")
+    )
+    assert np.median(px4_law) < 0.02 and np.median(px4_ff) > 0.1  # the oracle: PX4 logs _vel_sp
+    config, items = competition(shared_data, 2, seed=0)
+    sink = MemorySink()
+    fly_mission(config, items, sink=sink)
+    law, ff = _velocity_setpoint_residuals(ULog(io.BytesIO(sink.logs[0])))
+    assert np.percentile(law, 90) < 0.05, np.percentile(law, 90)
+    assert np.median(ff) > 0.1, np.median(ff)  # the trajectory's velocity alone is not what is logged

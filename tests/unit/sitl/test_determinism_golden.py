@@ -227,26 +227,28 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: PositionControl flies with, PositionControl's horizontal anti-windup, the
 #: hover_thrust_estimate topic, HTE_* / MPC_USE_HTE in the parameter list and the thrust setpoint's
 #: horizontal part scaled as PX4's decoupled one; the anti-windup in position mode too) (2026-11-26,
-#: stop 21).
+#: stop 21); the logs again (the MAVLink streams unchanged) for vehicle_local_position_setpoint's
+#: velocity logged as PositionControl's _vel_sp (the trajectory's velocity plus MPC_XY_P / MPC_Z_P
+#: times the position error), as PX4 logs it (stop 22).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "047a5abbeef7aecd1e0af1e7e8c9c4b6895a9dba116dffa44aecbec0e2ca0140",
+        "e6ba8e2ce36b8de88c551ad6e387dee145e31e87772930bf1c91732ef8f7f532",
         "ced0d38f5987a7841b997f88b29e781f4baf19143e9d08d70a2a391f33ed4e62",
     ),
     "manual_and_rtl": (
-        "65428e56455bcacb566e5df5bd52ed0cb03e4a875da11148a942ae21f8f283ff",
+        "2d2c96cfdeee5d321cf076ae512c4eff97fdfc4f4fcfe5f49445fd85c478b41a",
         "495a2aae07e501ca0bf616e32f4ebc5768f19596788009d14c6ab504bf9a7d6b",
     ),
     "datalink_loss": (
-        "96375a63b0aabb342c131a3fbc4b3a1b95d158076a1072d8c4d2b2abdc3954de",
+        "74a217a4ea4ef37e74770f472878c3c7bfbddbe40ec001e58aaf50251029554f",
         "1552bc85edf597e0eeafc091066ee4bebf99e12a17ad0a9ad2f0441bd89226c0",
     ),
     "crash": (
-        "349929acc900218c29f6b19a0758402575864101e53a065c2d7a90e95e81f269",
+        "a08b949f2c5cd9107becb36f9ef07783e85c160f4cc728507f0d622ab92b7d8d",
         "8b8e84f6ddf89ace3dd3c0225849a02305570cf7e162c7348c770a1856ea105e",
     ),
     "params_and_commands": (
-        "2d73982e6f9a0507cebc6c45b26a3054826a263695e1c6aa24f241c97639b125",
+        "a0e77921890f2de6a554a8dd49ce51ef94bda8ff5d2a353155672aee45171f17",
         "6c364e72dfefd52f653c5a3527ba02f78b5cd43c5d13c1ec75c93ad62746811e",
     ),
 }
