@@ -26,12 +26,14 @@ from dataclasses import dataclass
 from enum import Enum
 
 from uavtest.sitl import velocity_smoothing
+from uavtest.sitl.mc_att_control import YawGains, yaw_rate_setpoint
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.simulator_sih import GRAVITY
 
 __all__ = ["IDLE", "Controller", "Goal", "GoalKind", "Limits", "wrap_pi"]
 
 TKO_RAMP_START = 0.7  # m/s (down): PX4's takeoff ramp start
+YAWSPEED_FILTER_TAU = 0.2  # s: FlightTaskAuto's _yawspeed_filter
 Z_I_SCALE = 0.1
 
 
@@ -119,6 +121,7 @@ class Limits:
     acc_rad: float
     alt_rad: float
     traj_p: float
+    att: YawGains  # mc_att_control's yaw gains
 
     @classmethod
     def of(cls, p: ParamStore) -> Limits:
@@ -160,6 +163,7 @@ class Limits:
             acc_rad=p["NAV_ACC_RAD"],
             alt_rad=p["NAV_MC_ALT_RAD"],
             traj_p=p["MPC_XY_TRAJ_P"],
+            att=YawGains.of(p),
         )
 
 
@@ -257,9 +261,12 @@ def corner_speed(
 class Controller:
     """Turns a Goal and the estimated state into acceleration (NED, net of gravity) and yaw-rate commands."""
 
-    def __init__(self, limits: Limits, yaw_rate_scale: float = 1.0) -> None:
+    def __init__(self, limits: Limits, yaw_rate_scale: float = 1.0, px4_yaw: bool = True) -> None:
         self.lim = limits
         self.yaw_rate_scale = yaw_rate_scale
+        #: PX4's yaw chain (FlightTaskAuto's setpoint slew and feed-forward, mc_att_control's law)
+        #: for PX4 SIH; False: the Gazebo system's rate-limited yaw the local planner was calibrated with
+        self.px4_yaw = px4_yaw
         self.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self.ramp = 0.0  # seconds into the takeoff ramp
         self.of_ramp = 1e9  # seconds into an offboard takeoff (the vehicle restarts it while landed)
@@ -438,7 +445,17 @@ class Controller:
             self.pz, self.vz = tz, 0.0
 
     def _yaw(self, dt: float, yaw: float, target: float) -> float:
+        """The yaw rate command towards ``target`` (NaN: hold the setpoint)."""
         lim = self.lim
+        if self.px4_yaw:
+            # FlightTaskAuto::_limitYawRate: the setpoint moves towards the target at
+            # MPC_YAWRAUTO_MAX at most (no acceleration limit in v1.15's auto modes), and its rate
+            # of change, low-passed (AlphaFilter, 0.2 s), is the yawspeed setpoint fed forward
+            step = lim.yaw_rate * dt
+            d = 0.0 if target != target else max(-step, min(step, wrap_pi(target - self.yaw_sp)))
+            self.yaw_sp = wrap_pi(self.yaw_sp + d)
+            self.yawrate_sp += (d / dt - self.yawrate_sp) * (dt / (dt + YAWSPEED_FILTER_TAU))
+            return yaw_rate_setpoint(self.yaw_sp, yaw, self.yawrate_sp, lim.att)
         if not math.isnan(target):
             self.yaw_sp = target
         err = wrap_pi(self.yaw_sp - yaw)
@@ -586,9 +603,17 @@ class Controller:
         self.vsx, self.vsy = cx, cy
         ax, ay = self._limit_tilt(*self._velocity_pid(dt, cx - vx, cy - vy, az), lim.tilt_max)
         if goal.yawspeed == goal.yawspeed and goal.yaw != goal.yaw:
+            # PositionControl: no yaw, so the yaw setpoint is the heading and the rate is fed forward
             self.yaw_sp = yaw
             self.yawrate_sp = goal.yawspeed
             yr = goal.yawspeed
+        elif self.px4_yaw:
+            # no flight task in offboard: the client's yaw (and yawspeed, fed forward) go to the
+            # attitude controller as they are, limited only by MC_YAWRATE_MAX
+            if goal.yaw == goal.yaw:
+                self.yaw_sp = goal.yaw
+            self.yawrate_sp = goal.yawspeed if goal.yawspeed == goal.yawspeed else 0.0
+            yr = yaw_rate_setpoint(self.yaw_sp, yaw, self.yawrate_sp, lim.att)
         else:
             yr = self._yaw(dt, yaw, goal.yaw)
         return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr

@@ -117,6 +117,14 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "MC_ORBIT_RAD_MAX": (FLOAT, 1000.0),
     "MPC_THR_HOVER": (FLOAT, 0.5),
     "MPC_USE_HTE": (INT, 1),
+    # attitude and rate control, the yaw axis (mc_att_control, mc_rate_control)
+    "MC_YAW_P": (FLOAT, 2.8),
+    "MC_YAW_WEIGHT": (FLOAT, 0.4),
+    "MC_YAWRATE_MAX": (FLOAT, 200.0),
+    "MC_YAWRATE_P": (FLOAT, 0.2),
+    "MC_YAWRATE_I": (FLOAT, 0.1),
+    "MC_YAWRATE_K": (FLOAT, 1.0),
+    "MC_YR_INT_LIM": (FLOAT, 0.3),
     # hover thrust estimator (mc_hover_thrust_estimator)
     "HTE_HT_NOISE": (FLOAT, 0.0036),
     "HTE_ACC_GATE": (FLOAT, 3.0),
@@ -150,7 +158,6 @@ UNMODELLED_AT_BOOT: tuple[str, ...] = (
     "MPC_ACC_HOR_MAX",
     "MPC_TILTMAX_LND",
     "MPC_ALT_MODE",
-    "MC_YAWRATE_MAX",
     "MAV_SYS_ID",
     "MAV_COMP_ID",
     "MAV_TYPE",

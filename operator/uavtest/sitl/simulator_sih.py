@@ -15,6 +15,7 @@ import random
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from uavtest.sitl.mc_rate_control import I_FACTOR_RATE, YawRateGains
 from uavtest.spec.models import Obstacle, Wind
 
 __all__ = ["GRAVITY", "HOVER_THRUST", "Body", "Box", "WindModel", "World"]
@@ -37,6 +38,18 @@ DRAG_QUADRATIC = 0.0  # 1/m: SIH has none
 #: quadratic 1/m) as calibrated against the competition's own local-planner flights
 DRAG_GAZEBO_IRIS = (0.15, 0.06)
 DRAG_VERTICAL = 0.8  # 1/s
+#: PX4 SIH's yaw (``sih.cpp``, the quadrotor's defaults): the yaw moment is SIH_Q_MAX (0.1 N m) x
+#: (u0 + u1 - u2 - u3) of the motor commands, which reach them through SIH_T_TAU's lag. PX4's
+#: control allocation normalises its yaw column (``ControlAllocationPseudoInverse``, the multirotor's
+#: normalize_rpy): one unit of normalised yaw torque moves each rotor's command by one unit, so it is
+#: 4 x 0.1 N m; with SIH_IZZ 0.03 kg m^2 that is this angular acceleration (rad/s^2). The sequential
+#: desaturation gives in on yaw first: the rotors' differential stays within the collective's
+#: headroom. SIH_KDW (0.025 N m s) damps the rate.
+YAW_TORQUE_GAIN = 4 * 0.1 / 0.03
+YAW_DAMPING = 0.025 / 0.03  # 1/s
+MOTOR_TAU = 0.05  # s: SIH_T_TAU
+#: the competition's system under test (Gazebo, iris): its yaw rate follows the command with this lag
+TAU_YAW_GAZEBO = 0.08  # s
 #: the collective thrust (0..1) that holds SIH's quadrotor up: SIH_MASS * g / (4 * SIH_T_MAX)
 HOVER_THRUST = 1.0 * GRAVITY / (4 * 5.0)
 LIFTOFF_ACC = 3.0  # m/s^2 of net upward thrust needed to leave the ground (PX4 SIH lifts off late)
@@ -191,6 +204,9 @@ class Body:
         "x",
         "y",
         "yaw",
+        "yaw_int",
+        "yaw_rate_gains",
+        "yaw_torque",
         "yawrate",
         "z",
     )
@@ -201,12 +217,18 @@ class Body:
         drag_scale: float = 1.0,
         drag: tuple[float, float] = (DRAG_LINEAR, DRAG_QUADRATIC),
         delay_steps: int = 0,
+        yaw_rate_gains: YawRateGains | None = None,
     ) -> None:
         self.x = self.y = self.z = 0.0
         self.vx = self.vy = self.vz = 0.0
         self.ax = self.ay = self.az = 0.0  # acceleration from thrust (without gravity), NED
         self.yaw = 0.0
         self.yawrate = 0.0
+        #: PX4's yaw rate loop and SIH's yaw torque (``mc_rate_control``); None: the Gazebo
+        #: system's first-order yaw rate response (``TAU_YAW_GAZEBO``)
+        self.yaw_rate_gains = yaw_rate_gains
+        self.yaw_int = 0.0  # the rate loop's integral (normalised torque)
+        self.yaw_torque = 0.0  # the normalised yaw torque the motors give (SIH_T_TAU behind)
         self.on_ground = True
         self.motors = False
         self.tau_tilt = tau_tilt
@@ -243,7 +265,7 @@ class Body:
         if self.on_ground:
             if fz >= -LIFTOFF_ACC:  # not enough thrust to leave the ground: no motion
                 self.vx = self.vy = self.vz = 0.0
-                self.yawrate = 0.0
+                self.yawrate = self.yaw_int = self.yaw_torque = 0.0
                 return
             self.on_ground = False
         self.vx += fx * dt
@@ -252,7 +274,35 @@ class Body:
         self.x += self.vx * dt
         self.y += self.vy * dt
         self.z += self.vz * dt
-        self.yawrate += (cyawrate - self.yawrate) * (dt / 0.08)
+        g = self.yaw_rate_gains
+        if not self.motors and g is not None:  # disarmed: no rate loop, no torque
+            self.yaw_int = self.yaw_torque = 0.0
+            self.yawrate -= YAW_DAMPING * self.yawrate * dt
+        elif g is None:
+            self.yawrate += (cyawrate - self.yawrate) * (dt / TAU_YAW_GAZEBO)
+        else:
+            # RateControl::update (yaw): P on the rate error plus its integral, then SIH's motors
+            # and yaw moment against its angular damping
+            e = cyawrate - self.yawrate
+            u = g.p * e + self.yaw_int
+            # the control allocation (sequential desaturation) gives in on yaw first: the rotors'
+            # differential stays within the collective thrust's headroom, and the rate loop's
+            # integral stops growing into a saturated direction
+            collective = (GRAVITY - self.az) * HOVER_THRUST / GRAVITY
+            umax = min(collective, 1.0 - collective)
+            if u > umax:
+                u = umax
+                e = min(e, 0.0)
+            elif u < -umax:
+                u = -umax
+                e = max(e, 0.0)
+            f = e / I_FACTOR_RATE
+            f = 1.0 - f * f
+            if f > 0.0:
+                i = self.yaw_int + f * g.i * e * dt
+                self.yaw_int = g.int_lim if i > g.int_lim else (-g.int_lim if i < -g.int_lim else i)
+            self.yaw_torque += (u - self.yaw_torque) * (dt / MOTOR_TAU)
+            self.yawrate += (YAW_TORQUE_GAIN * self.yaw_torque - YAW_DAMPING * self.yawrate) * dt
         self.yaw += self.yawrate * dt
         if self.yaw > math.pi:
             self.yaw -= 2 * math.pi

@@ -47,6 +47,7 @@ from uavtest.sitl.mavlink_io import custom_mode_name
 from uavtest.sitl.mavlink_streams import ORBIT_STATUS_HZ, STREAMS, SW_VERSION, orbit_execution_status
 from uavtest.sitl.mc_hover_thrust_estimator import HoverThrustEstimator
 from uavtest.sitl.mc_pos_control import IDLE, Controller, Goal, GoalKind, Limits
+from uavtest.sitl.mc_rate_control import YawRateGains
 from uavtest.sitl.mission import NavItem
 from uavtest.sitl.navigator import EventKind, Navigator, State
 from uavtest.sitl.offboard import Offboard
@@ -169,6 +170,7 @@ class Vehicle:
             drag_scale=drag_scale,
             drag=DRAG_GAZEBO_IRIS if planner else (DRAG_LINEAR, DRAG_QUADRATIC),
             delay_steps=0 if planner else round(ATTITUDE_DELAY / (STEP_US / 1e6)),
+            yaw_rate_gains=None if planner else YawRateGains.of(self.params),
         )
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
@@ -188,7 +190,7 @@ class Vehicle:
         if not planner:
             self.sim.hover_thrust = HoverThrustEstimator(self.params)
         self.limits = Limits.of(self.params)
-        self.ctrl = Controller(self.limits, yaw_rate_scale=yaw_rate_scale)
+        self.ctrl = Controller(self.limits, yaw_rate_scale=yaw_rate_scale, px4_yaw=not planner)
         self.land = LandDetector(self.params, self.ctrl, land_jitter, self.est)
         self.nav = Navigator(self.params, self.proj, self.home_alt, random.Random(f"{seed}:navigator"))
         if planner:  # PX4-Avoidance's local planner flies the auto modes' waypoints (COM_OBS_AVOID 1)
@@ -717,6 +719,8 @@ class Vehicle:
         self.param_proto.changed.clear()
         self.limits = Limits.of(self.params)
         self.ctrl.lim = self.limits
+        if self.body.yaw_rate_gains is not None:
+            self.body.yaw_rate_gains = YawRateGains.of(self.params)
         self._setup_collision_prevention()
         self.sim.battery.update_params()
 

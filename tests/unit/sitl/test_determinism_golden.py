@@ -229,27 +229,30 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: horizontal part scaled as PX4's decoupled one; the anti-windup in position mode too) (2026-11-26,
 #: stop 21); the logs again (the MAVLink streams unchanged) for vehicle_local_position_setpoint's
 #: velocity logged as PositionControl's _vel_sp (the trajectory's velocity plus MPC_XY_P / MPC_Z_P
-#: times the position error), as PX4 logs it (stop 22).
+#: times the position error), as PX4 logs it (stop 22); and for PX4's yaw chain (FlightTaskAuto's
+#: setpoint slew at MPC_YAWRAUTO_MAX without an acceleration limit and its filtered feed-forward,
+#: mc_att_control's MC_YAW_P law, mc_rate_control's yaw PI and SIH's yaw torque, damping and
+#: allocation headroom) (stop 22).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "e6ba8e2ce36b8de88c551ad6e387dee145e31e87772930bf1c91732ef8f7f532",
-        "ced0d38f5987a7841b997f88b29e781f4baf19143e9d08d70a2a391f33ed4e62",
+        "0f5a2ddea0b402bb584e5a7f9efe4c43abda5c95d136002d0cba4a40df7b846b",
+        "6c36c20cc08ac807c45bffb7447dafed8b15893f04d07edf21f7d14c77d1ce6f",
     ),
     "manual_and_rtl": (
-        "2d2c96cfdeee5d321cf076ae512c4eff97fdfc4f4fcfe5f49445fd85c478b41a",
-        "495a2aae07e501ca0bf616e32f4ebc5768f19596788009d14c6ab504bf9a7d6b",
+        "be86112d3aab87797eaa9d0d45b0a5c8f33247d0b7b7574e568ffc57f2e32713",
+        "0f7c3ace0155badfd5873247423c407eeccbe60e5f9e8eeeebb81e1c8cfd4f7d",
     ),
     "datalink_loss": (
-        "74a217a4ea4ef37e74770f472878c3c7bfbddbe40ec001e58aaf50251029554f",
+        "7a189b59e3f56e324419e9a2c6c9205baaaa104aa8dcc2eaddc65fef64f92940",
         "1552bc85edf597e0eeafc091066ee4bebf99e12a17ad0a9ad2f0441bd89226c0",
     ),
     "crash": (
-        "a08b949f2c5cd9107becb36f9ef07783e85c160f4cc728507f0d622ab92b7d8d",
-        "8b8e84f6ddf89ace3dd3c0225849a02305570cf7e162c7348c770a1856ea105e",
+        "8a04b0abc1a8e8dc566b789d5e9ffc0c715add483bfb8b16acd73256ca5fad9c",
+        "b3c7250a1ad1ce7dbda5642d976e40a5e85826adc48c6e0ba02051dd5eae0abe",
     ),
     "params_and_commands": (
-        "a0e77921890f2de6a554a8dd49ce51ef94bda8ff5d2a353155672aee45171f17",
-        "6c364e72dfefd52f653c5a3527ba02f78b5cd43c5d13c1ec75c93ad62746811e",
+        "de7f40bced722a255727f7c737c9c33e08073efe66d6c17ef429a13093c56498",
+        "80ea7dc01014560d7f36323a81a4ae27f794626e1ae8fef74697d549346a76ab",
     ),
 }
 

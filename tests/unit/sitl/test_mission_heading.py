@@ -79,7 +79,8 @@ def _takeoff_yaw_setpoint(drift_east: float, goal_yaw: float) -> float:
     ctrl = Controller(Limits.of(ParamStore({"NAV_ACC_RAD": 0.5})))
     ctrl.reset(0.0, drift_east, -3.0, 0.0, 0.0, 0.0, 0.0)
     goal = Goal(GoalKind.TAKEOFF, x=0.0, y=0.0, z=-10.0, yaw=goal_yaw)
-    ctrl.update(0.004, goal, 0.0, drift_east, -3.0, 0.0, 0.0, -1.0, 0.0)
+    for _ in range(150):  # 3 s: FlightTaskAuto moves the setpoint at MPC_YAWRAUTO_MAX
+        ctrl.update(0.02, goal, 0.0, drift_east, -3.0, 0.0, 0.0, -1.0, 0.0)
     return math.degrees(ctrl.yaw_sp)
 
 

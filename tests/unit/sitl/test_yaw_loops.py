@@ -1,0 +1,84 @@
+"""PX4 v1.15's yaw chain in the built-in vehicle: mc_att_control's yaw law, mc_rate_control's yaw
+PI and SIH's yaw torque (``simulator_sih.Body``). Compared with PX4 SIH flights in
+``test_sih_body_fixed.py`` (mission turns) and ``test_offboard.py`` (a yaw rate alone)."""
+
+import itertools
+import math
+
+import pytest
+
+from uavtest.sitl.mc_att_control import YawGains, yaw_rate_setpoint
+from uavtest.sitl.mc_rate_control import YawRateGains
+from uavtest.sitl.params import ParamStore
+from uavtest.sitl.simulator_sih import HOVER_THRUST, YAW_DAMPING, YAW_TORQUE_GAIN, Body
+
+GAINS = YawGains.of(ParamStore())
+
+
+def test_a_small_yaw_error_asks_mc_yaw_p_times_it_plus_the_feedforward():
+    assert yaw_rate_setpoint(0.05, 0.0, math.nan, GAINS) == pytest.approx(2.8 * 0.05, rel=1e-3)
+    assert yaw_rate_setpoint(0.05, 0.0, 0.3, GAINS) == pytest.approx(2.8 * 0.05 + 0.3, rel=1e-3)
+
+
+def test_a_large_yaw_error_is_limited_to_mc_yawrate_max_and_turns_the_short_way():
+    assert yaw_rate_setpoint(math.radians(150), 0.0, math.nan, GAINS) == pytest.approx(math.radians(200))
+    # 170 degrees to -170 degrees is 20 degrees clockwise, not 340 anticlockwise
+    rate = yaw_rate_setpoint(math.radians(-170), math.radians(170), math.nan, GAINS)
+    assert rate > 0.0
+    assert rate == pytest.approx(2.8 / 0.4 * 2 * math.sin(0.4 * math.radians(20) / 2), rel=1e-3)
+
+
+def test_mc_yaw_weight_compensates_its_own_scaling():
+    """``setProportionalGain`` divides MC_YAW_P by the weight: small errors get MC_YAW_P whatever
+    the weight; large ones less than linear."""
+    for w in (0.2, 0.4, 1.0):
+        g = YawGains.of(ParamStore({"MC_YAW_WEIGHT": w}))
+        assert yaw_rate_setpoint(0.01, 0.0, math.nan, g) == pytest.approx(0.028, rel=1e-3)
+    heavy = YawGains.of(ParamStore({"MC_YAW_WEIGHT": 1.0, "MC_YAWRATE_MAX": 1000}))
+    assert yaw_rate_setpoint(2.0, 0.0, math.nan, heavy) < 2.8 * 2.0
+
+
+def _hovering_body(gains: YawRateGains | None) -> Body:
+    body = Body(yaw_rate_gains=gains)
+    body.motors = True
+    body.on_ground = False
+    body.z = -5.0
+    body.az = 0.0  # net of gravity: the thrust holds the weight (commanded 0 below)
+    return body
+
+
+def test_a_rate_step_saturates_the_yaw_torque_at_the_collectives_headroom():
+    """PX4's sequential desaturation gives in on yaw first: hovering at SIH's 0.49 collective, the
+    rotors' differential is at most 0.49, so a 200 degrees/s step accelerates at no more than
+    4 x SIH_Q_MAX x 0.49 / SIH_IZZ (6.5 rad/s^2); the motors' 0.05 s lag softens the start."""
+    body = _hovering_body(YawRateGains.of(ParamStore()))
+    dt = 0.004
+    rates = []
+    for _ in range(100):  # 0.4 s
+        body.step(dt, 0.0, 0.0, 0.0, math.radians(200), 0.0, 0.0, 0.0)
+        rates.append(body.yawrate)
+    accel = [(b - a) / dt for a, b in itertools.pairwise(rates)]
+    limit = YAW_TORQUE_GAIN * HOVER_THRUST
+    assert max(accel) <= limit * 1.001
+    assert max(accel) > 0.8 * limit  # it does saturate
+    assert accel[0] < 0.2 * limit  # SIH_T_TAU: not at once
+
+
+def test_the_rate_loop_holds_a_rate_against_sihs_damping_with_its_integral():
+    """P alone would settle at 0.2 x 13.3 / (0.2 x 13.3 + KDW / IZZ) of the rate asked (0.76);
+    the integral (MC_YAWRATE_I) takes it to the rate."""
+    body = _hovering_body(YawRateGains.of(ParamStore()))
+    for _ in range(int(1.0 / 0.004)):
+        body.step(0.004, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0)
+    p_only = 0.2 * YAW_TORQUE_GAIN / (0.2 * YAW_TORQUE_GAIN + YAW_DAMPING)
+    assert 0.5 * p_only * 0.95 < body.yawrate < 0.5 * 0.97
+    for _ in range(int(20.0 / 0.004)):
+        body.step(0.004, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0)
+    assert body.yawrate == pytest.approx(0.5, abs=0.01)
+
+
+def test_the_local_planners_system_keeps_its_first_order_yaw():
+    body = _hovering_body(None)
+    for _ in range(int(0.08 / 0.004)):
+        body.step(0.004, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+    assert body.yawrate == pytest.approx(1.0 - math.exp(-1.0), abs=0.03)
