@@ -103,6 +103,7 @@ class Limits:
     tilt_max: float
     man_tilt_max: float
     man_yaw_max: float
+    man_yaw_tau: float
     xy_p: float
     z_p: float
     vxy_p: float
@@ -145,6 +146,7 @@ class Limits:
             tilt_max=math.radians(p["MPC_TILTMAX_AIR"]),
             man_tilt_max=math.radians(p["MPC_MAN_TILT_MAX"]),
             man_yaw_max=math.radians(p["MPC_MAN_Y_MAX"]),
+            man_yaw_tau=p["MPC_MAN_Y_TAU"],
             xy_p=p["MPC_XY_P"],
             z_p=p["MPC_Z_P"],
             vxy_p=p["MPC_XY_VEL_P_ACC"],
@@ -267,6 +269,9 @@ class Controller:
         #: PX4's yaw chain (FlightTaskAuto's setpoint slew and feed-forward, mc_att_control's law)
         #: for PX4 SIH; False: the Gazebo system's rate-limited yaw the local planner was calibrated with
         self.px4_yaw = px4_yaw
+        #: the heading the manual modes hold (StickYaw's lock, stabilized's integrated setpoint);
+        #: NaN: none yet (set again on entering a manual mode)
+        self.yaw_lock = math.nan
         self.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self.ramp = 0.0  # seconds into the takeoff ramp
         self.of_ramp = 1e9  # seconds into an offboard takeoff (the vehicle restarts it while landed)
@@ -447,6 +452,7 @@ class Controller:
     def _yaw(self, dt: float, yaw: float, target: float) -> float:
         """The yaw rate command towards ``target`` (NaN: hold the setpoint)."""
         lim = self.lim
+        self.yaw_lock = math.nan
         if self.px4_yaw:
             # FlightTaskAuto::_limitYawRate: the setpoint moves towards the target at
             # MPC_YAWRAUTO_MAX at most (no acceleration limit in v1.15's auto modes), and its rate
@@ -608,6 +614,7 @@ class Controller:
             self.yawrate_sp = goal.yawspeed
             yr = goal.yawspeed
         elif self.px4_yaw:
+            self.yaw_lock = math.nan
             # no flight task in offboard: the client's yaw (and yawspeed, fed forward) go to the
             # attitude controller as they are, limited only by MC_YAWRATE_MAX
             if goal.yaw == goal.yaw:
@@ -630,14 +637,21 @@ class Controller:
         climb = (sz - 0.5) * 2.0
         climb = 0.0 if abs(climb) < dz else climb
         c, s = math.cos(yaw), math.sin(yaw)
-        self.yaw_sp = yaw
-        self.yawrate_sp = sr * lim.man_yaw_max
         if goal.kind is GoalKind.ATTITUDE:
             bx, by = GRAVITY * math.tan(sx * lim.man_tilt_max), GRAVITY * math.tan(sy * lim.man_tilt_max)
             az = -(sz / 0.5 - 1.0) * GRAVITY
             self.reset(x, y, z, vx, vy, vz, yaw)
             self.vsx = self.vsy = self.vsz = math.nan  # no velocity control: PX4 logs none
-            return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(GRAVITY, az)), self.yawrate_sp
+            rate = sr * lim.man_yaw_max
+            self.yawrate_sp = rate
+            if self.px4_yaw:
+                # mc_att_control's generate_attitude_setpoint: the yaw setpoint integrates the
+                # stick's rate, which is also fed forward
+                lock = self.yaw_lock if self.yaw_lock == self.yaw_lock else yaw
+                self.yaw_lock = self.yaw_sp = wrap_pi(lock + rate * dt)
+                rate = yaw_rate_setpoint(self.yaw_lock, yaw, rate, lim.att)
+            return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(GRAVITY, az)), rate
+        yr = self._stick_yaw(dt, sr, yaw)
         # climb rate (altitude and position mode)
         self.vz = -climb * (lim.z_up if climb > 0 else lim.z_down)
         if climb == 0.0 and abs(vz) < 0.3 and abs(self.pz - z) > 1.0:
@@ -650,7 +664,7 @@ class Controller:
             bx, by = GRAVITY * math.tan(sx * lim.man_tilt_max), GRAVITY * math.tan(sy * lim.man_tilt_max)
             self.px, self.py, self.vx, self.vy = x, y, vx, vy
             self.vsx = self.vsy = math.nan  # tilt from the sticks: no horizontal velocity control
-            return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(0.8 * GRAVITY, az)), self.yawrate_sp
+            return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
         # position mode: sticks are a body-frame velocity
         bvx, bvy = sx * lim.vel_manual, sy * lim.vel_manual
         self.stretch = 1.0
@@ -668,7 +682,29 @@ class Controller:
                 self.px, self.py = x + self.vx * 0.2, y + self.vy * 0.2
         ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
-        return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), self.yawrate_sp
+        return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
+
+    def _stick_yaw(self, dt: float, stick: float, yaw: float) -> float:
+        """The yaw rate command of the altitude and position modes from the yaw stick.
+
+        PX4's ``StickYaw``: the stick's rate (MPC_MAN_Y_MAX) low-passed at MPC_MAN_Y_TAU is the
+        yawspeed setpoint, fed forward with no yaw setpoint while it is not zero; once it has
+        decayed the heading is locked where it is and held (mc_att_control's MC_YAW_P)."""
+        lim = self.lim
+        if not self.px4_yaw:
+            self.yaw_sp = yaw
+            self.yawrate_sp = stick * lim.man_yaw_max
+            return self.yawrate_sp
+        self.yawrate_sp += (stick * lim.man_yaw_max - self.yawrate_sp) * (dt / (dt + lim.man_yaw_tau))
+        if abs(self.yawrate_sp) > 1e-7:  # StickYaw::updateYawLock: FLT_EPSILON
+            self.yaw_lock = math.nan
+            self.yaw_sp = yaw
+            return yaw_rate_setpoint(yaw, yaw, self.yawrate_sp, lim.att)
+        self.yawrate_sp = 0.0
+        if self.yaw_lock != self.yaw_lock:
+            self.yaw_lock = yaw
+        self.yaw_sp = self.yaw_lock
+        return yaw_rate_setpoint(self.yaw_lock, yaw, math.nan, lim.att)
 
     def _direct_velocity(self, wx: float, wy: float, x: float, y: float, vx: float, vy: float) -> None:
         """FlightTaskManualPosition (MPC_POS_MODE 0): the velocity setpoint as the sticks (and

@@ -99,6 +99,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "MPC_TILTMAX_AIR": (FLOAT, 45.0),
     "MPC_MAN_TILT_MAX": (FLOAT, 35.0),
     "MPC_MAN_Y_MAX": (FLOAT, 150.0),
+    "MPC_MAN_Y_TAU": (FLOAT, 0.08),
     "MPC_XY_P": (FLOAT, 0.95),
     "MPC_Z_P": (FLOAT, 1.0),
     "MPC_XY_VEL_P_ACC": (FLOAT, 1.8),

@@ -232,27 +232,28 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: times the position error), as PX4 logs it (stop 22); and for PX4's yaw chain (FlightTaskAuto's
 #: setpoint slew at MPC_YAWRAUTO_MAX without an acceleration limit and its filtered feed-forward,
 #: mc_att_control's MC_YAW_P law, mc_rate_control's yaw PI and SIH's yaw torque, damping and
-#: allocation headroom) (stop 22).
+#: allocation headroom), and the manual modes' StickYaw (MPC_MAN_Y_TAU, in the parameter list: the
+#: parameter streams too) and heading lock (stop 22).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "0f5a2ddea0b402bb584e5a7f9efe4c43abda5c95d136002d0cba4a40df7b846b",
+        "2157f2344a5939e1d40f923d33f14a1a227a91f58019f85e517e87c42e4449ee",
         "6c36c20cc08ac807c45bffb7447dafed8b15893f04d07edf21f7d14c77d1ce6f",
     ),
     "manual_and_rtl": (
-        "be86112d3aab87797eaa9d0d45b0a5c8f33247d0b7b7574e568ffc57f2e32713",
-        "0f7c3ace0155badfd5873247423c407eeccbe60e5f9e8eeeebb81e1c8cfd4f7d",
+        "d2281458582ae062c0b3694442aadf427694582bbbde2bb8dad755e93f6ef8f8",
+        "7c75200da08781ecb1d2d685617e9c80d831f205ec8569fde72e69ebad9a6cf0",
     ),
     "datalink_loss": (
-        "7a189b59e3f56e324419e9a2c6c9205baaaa104aa8dcc2eaddc65fef64f92940",
+        "95fdbdae788e413688229d205ca2082df51d528a80a18c4c568027088bfe27b4",
         "1552bc85edf597e0eeafc091066ee4bebf99e12a17ad0a9ad2f0441bd89226c0",
     ),
     "crash": (
-        "8a04b0abc1a8e8dc566b789d5e9ffc0c715add483bfb8b16acd73256ca5fad9c",
+        "b7b16429070369cf09015bb0b5c4542449ec32a251cd4d5f1a8b115be4c2426c",
         "b3c7250a1ad1ce7dbda5642d976e40a5e85826adc48c6e0ba02051dd5eae0abe",
     ),
     "params_and_commands": (
-        "de7f40bced722a255727f7c737c9c33e08073efe66d6c17ef429a13093c56498",
-        "80ea7dc01014560d7f36323a81a4ae27f794626e1ae8fef74697d549346a76ab",
+        "e51c64b4637912b2092823663998ef89623d1cdc07e7c63fad4c4930f839e2e9",
+        "a0d969291a9b563065036811a576ff8b2d1c24285bf92d8ab15a5300c9bdc612",
     ),
 }
 

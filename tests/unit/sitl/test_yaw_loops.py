@@ -5,6 +5,7 @@ PI and SIH's yaw torque (``simulator_sih.Body``). Compared with PX4 SIH flights 
 import itertools
 import math
 
+import numpy as np
 import pytest
 
 from uavtest.sitl.mc_att_control import YawGains, yaw_rate_setpoint
@@ -82,3 +83,49 @@ def test_the_local_planners_system_keeps_its_first_order_yaw():
     for _ in range(int(0.08 / 0.004)):
         body.step(0.004, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
     assert body.yawrate == pytest.approx(1.0 - math.exp(-1.0), abs=0.03)
+
+
+def _posctl_vehicle():
+    from uavtest.px4.modes import MainMode, NavState
+    from uavtest.sitl.mav import MavCmd, Msg
+    from uavtest.sitl.vehicle import SimConfig, Vehicle
+
+    gcs = (255, 190)
+
+    def command(v, cmd, *params):
+        fields = {"command": cmd, "target_system": 1, "target_component": 1}
+        fields.update({f"param{i}": p for i, p in enumerate(params, start=1)})
+        v.receive(Msg("COMMAND_LONG", fields, *gcs))
+
+    v = Vehicle(SimConfig())
+    v.fly_until(lambda v: v.ready, 5_000_000)
+    command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
+    command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, 488.0 + 5)
+    v.fly_until(lambda v: v.nav_state == NavState.AUTO_LOITER, 30_000_000)
+    command(v, MavCmd.DO_SET_MODE, 1, MainMode.POSCTL, 0)
+
+    def sticks(r: int, seconds: float) -> list[float]:
+        headings = []
+        for _ in range(round(seconds * 10)):
+            v.receive(Msg("MANUAL_CONTROL", {"target": 1, "x": 0, "y": 0, "z": 500, "r": r}, *gcs))
+            v.advance(v.time_us + 100_000)
+            headings.append(v.st.yaw)
+        return headings
+
+    return v, sticks
+
+
+def test_a_yaw_stick_turns_and_the_released_heading_is_locked_and_held():
+    """Position mode (PX4's StickYaw): the stick's rate, low-passed at MPC_MAN_Y_TAU, is fed
+    forward with no yaw setpoint; once it has decayed, the heading is locked where it is and
+    MC_YAW_P holds it (the rate loop's overshoot is pulled back)."""
+    v, sticks = _posctl_vehicle()
+    turned = np.unwrap(sticks(300, 2.0))  # 30 % of MPC_MAN_Y_MAX 150 deg/s = 45 deg/s for 2 s
+    assert math.degrees(turned[-1] - turned[0]) > 45.0
+    sticks(0, 3.0)  # released: the filtered rate decays, then the heading locks
+    held = np.unwrap(sticks(0, 5.0))
+    assert v.ctrl.yaw_lock == v.ctrl.yaw_lock  # locked
+    # held on average where it locked; EKF2's heading error wanders the estimate by a degree or two
+    off = np.degrees(np.remainder(held - v.ctrl.yaw_lock + math.pi, math.tau) - math.pi)
+    assert abs(off.mean()) < 1.0, off
+    assert np.abs(off).max() < 4.0, off
