@@ -194,6 +194,54 @@ def test_mavsdk_offboard_square(tmp_path: Path):
         eventually(lambda: not telemetry.armed(), 40, "landed and disarmed")
 
 
+def test_mavsdk_offboard_yaw_and_yawspeed_turn_as_px4_sih_does(tmp_path: Path):
+    """MAVSDK's offboard yaw (degrees) and body yawspeed (degrees/s) over real UDP. PX4 v1.15 has
+    no flight task in offboard: a yaw goes to the attitude controller as it is (MC_YAW_P, up to
+    MC_YAWRATE_MAX), a yawspeed alone is fed forward to the rate loop. PX4 SIH, flown here with the
+    same setpoints through uavtest (README, "PX4's yaw chain"), turned a 120 degree step within 5
+    degrees in about 2 s, and 45.8 degrees in the first 2 s of 30 degrees/s (100.8 after 4 s); the
+    unit tests hold the built-in vehicle to those numbers, this one to MAVSDK's units and signs."""
+    mavsdk = pytest.importorskip("mavsdk")
+    from mavsdk import ComponentType, Configuration, Mavsdk
+    from mavsdk.plugins.action import Action
+    from mavsdk.plugins.offboard import Offboard, PositionNedYaw, VelocityBodyYawspeed
+    from mavsdk.plugins.telemetry import Telemetry
+
+    assert mavsdk
+    port = free_udp_port()
+    with running_sitl(free_running_argv(port, tmp_path / "log", 5)):
+        sdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
+        sdk.add_any_connection(f"udpin://127.0.0.1:{port}")
+        system = sdk.first_autopilot(15.0)
+        assert system is not None
+        telemetry, action, offboard = Telemetry(system), Action(system), Offboard(system)
+        eventually(lambda: telemetry.health().is_armable, 20, "armable")
+        action.arm()
+        offboard.set_position_ned(PositionNedYaw(0.0, 0.0, -4.0, 0.0))
+        offboard.start()
+        eventually(lambda: telemetry.position_velocity_ned().position.down_m < -3.6, 30, "the climb")
+
+        def heading() -> float:
+            return telemetry.attitude_euler().yaw_deg
+
+        def off(target: float) -> float:
+            return abs((heading() - target + 180.0) % 360.0 - 180.0)
+
+        eventually(lambda: off(0.0) < 3.0, 10, "north")
+        offboard.set_position_ned(PositionNedYaw(0.0, 0.0, -4.0, 120.0))
+        eventually(lambda: off(120.0) < 5.0, 4, "a 120 degree step within 5 degrees")
+        eventually(lambda: off(120.0) < 2.0, 10, "held at 120")
+        # 30 degrees/s clockwise (MAVSDK's yawspeed_deg_s, positive to the right): it turns that
+        # way, past 200 degrees, and a yawspeed of 0 stops it
+        offboard.set_velocity_body(VelocityBodyYawspeed(0.0, 0.0, 0.0, 30.0))
+        eventually(lambda: off(210.0) < 10.0, 20, "turning clockwise through 210 degrees")
+        offboard.set_velocity_body(VelocityBodyYawspeed(0.0, 0.0, 0.0, 0.0))
+        eventually(lambda: abs(telemetry.attitude_angular_velocity_body().yaw_rad_s) < 0.02, 10, "stopped")
+        offboard.stop()
+        action.land()
+        eventually(lambda: not telemetry.armed(), 40, "landed and disarmed")
+
+
 def test_example_offboard_square_passes_inside_its_fence(tmp_path: Path):
     """examples/offboard-square.yaml: every replica passes, the path inside the fence box."""
     out = uavtest_run(REPO / "examples" / "offboard-square.yaml", tmp_path / "out", "--replicas", "2")
