@@ -8,6 +8,7 @@ to the setpoint, and when the stream stops for COM_OF_LOSS_T the COM_OBL_RC_ACT 
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -158,14 +159,15 @@ def test_stream_switch_fly_then_lose_the_stream_lands(client: Client):
     assert math.hypot(client.last.x - 8.0, client.last.y - 4.0) < 1.0 and client.last.z > -0.3
 
 
-def test_mavsdk_offboard_square(tmp_path: Path):
-    mavsdk = pytest.importorskip("mavsdk")
+@contextlib.contextmanager
+def _mavsdk_armed(tmp_path: Path) -> Iterator[tuple]:
+    """A free-running built-in vehicle at speed factor 5 and MAVSDK connected to it over UDP,
+    armable: (telemetry, action, offboard)."""
     from mavsdk import ComponentType, Configuration, Mavsdk
     from mavsdk.plugins.action import Action
-    from mavsdk.plugins.offboard import Offboard, OffboardError, PositionNedYaw
+    from mavsdk.plugins.offboard import Offboard
     from mavsdk.plugins.telemetry import Telemetry
 
-    assert mavsdk
     port = free_udp_port()
     with running_sitl(free_running_argv(port, tmp_path / "log", 5)):
         sdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
@@ -174,6 +176,15 @@ def test_mavsdk_offboard_square(tmp_path: Path):
         assert system is not None
         telemetry, action, offboard = Telemetry(system), Action(system), Offboard(system)
         eventually(lambda: telemetry.health().is_armable, 20, "armable")
+        yield telemetry, action, offboard
+
+
+def test_mavsdk_offboard_square(tmp_path: Path):
+    mavsdk = pytest.importorskip("mavsdk")
+    from mavsdk.plugins.offboard import OffboardError, PositionNedYaw
+
+    assert mavsdk
+    with _mavsdk_armed(tmp_path) as (telemetry, action, offboard):
         action.arm()
         # MAVSDK refuses start() before a setpoint; the vehicle refuses offboard without a stream
         with pytest.raises(OffboardError):
@@ -202,20 +213,10 @@ def test_mavsdk_offboard_yaw_and_yawspeed_turn_as_px4_sih_does(tmp_path: Path):
     degrees in about 2 s, and 45.8 degrees in the first 2 s of 30 degrees/s (100.8 after 4 s); the
     unit tests hold the built-in vehicle to those numbers, this one to MAVSDK's units and signs."""
     mavsdk = pytest.importorskip("mavsdk")
-    from mavsdk import ComponentType, Configuration, Mavsdk
-    from mavsdk.plugins.action import Action
-    from mavsdk.plugins.offboard import Offboard, PositionNedYaw, VelocityBodyYawspeed
-    from mavsdk.plugins.telemetry import Telemetry
+    from mavsdk.plugins.offboard import PositionNedYaw, VelocityBodyYawspeed
 
     assert mavsdk
-    port = free_udp_port()
-    with running_sitl(free_running_argv(port, tmp_path / "log", 5)):
-        sdk = Mavsdk(Configuration.create_with_component_type(ComponentType.GROUND_STATION))
-        sdk.add_any_connection(f"udpin://127.0.0.1:{port}")
-        system = sdk.first_autopilot(15.0)
-        assert system is not None
-        telemetry, action, offboard = Telemetry(system), Action(system), Offboard(system)
-        eventually(lambda: telemetry.health().is_armable, 20, "armable")
+    with _mavsdk_armed(tmp_path) as (telemetry, action, offboard):
         action.arm()
         offboard.set_position_ned(PositionNedYaw(0.0, 0.0, -4.0, 0.0))
         offboard.start()
