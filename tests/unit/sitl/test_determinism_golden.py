@@ -233,27 +233,28 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: setpoint slew at MPC_YAWRAUTO_MAX without an acceleration limit and its filtered feed-forward,
 #: mc_att_control's MC_YAW_P law, mc_rate_control's yaw PI and SIH's yaw torque, damping and
 #: allocation headroom), and the manual modes' StickYaw (MPC_MAN_Y_TAU, in the parameter list: the
-#: parameter streams too) and heading lock (stop 22).
+#: parameter streams too) and heading lock; and for EKF2's heading error low-passed at 0.3 s (as
+#: smooth as PX4 SIH's logged heading) (stop 22).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "2157f2344a5939e1d40f923d33f14a1a227a91f58019f85e517e87c42e4449ee",
-        "6c36c20cc08ac807c45bffb7447dafed8b15893f04d07edf21f7d14c77d1ce6f",
+        "445c6be540c04b9f4e890c884204e57bb79e6a78d045bb8792126059a18bf1b1",
+        "7c909e4a31b5a8f359674a1dfd1bfe2e1ef0cc2c2de665beff1613fb0ee4aa6b",
     ),
     "manual_and_rtl": (
-        "d2281458582ae062c0b3694442aadf427694582bbbde2bb8dad755e93f6ef8f8",
-        "7c75200da08781ecb1d2d685617e9c80d831f205ec8569fde72e69ebad9a6cf0",
+        "9ad2a737905d9026dcaab0034fa344b5c415eccdd3036d0996aec0023dcee273",
+        "1a71ecf8e652e2c1bbca5f53eb4b5f84b26cf5760fbe3034d4f272ad73012ece",
     ),
     "datalink_loss": (
-        "95fdbdae788e413688229d205ca2082df51d528a80a18c4c568027088bfe27b4",
-        "1552bc85edf597e0eeafc091066ee4bebf99e12a17ad0a9ad2f0441bd89226c0",
+        "8e222fd70d035b6d4a9ace8015c8f4cbe340091faa1512d44ea4e771c983e017",
+        "91190aa28c8ca432cf3681a868ba489c21b4519c924cbd1effa551ec9b99fd35",
     ),
     "crash": (
-        "b7b16429070369cf09015bb0b5c4542449ec32a251cd4d5f1a8b115be4c2426c",
-        "b3c7250a1ad1ce7dbda5642d976e40a5e85826adc48c6e0ba02051dd5eae0abe",
+        "4a8bd5619f87ede64734c8699f12e6e90652dfc7a9231e6c565634be7178bcdd",
+        "b287e6fa1fe11cfb399dd09a350a0009e1a9ce40e2ef9a8e2fa65179996788b2",
     ),
     "params_and_commands": (
-        "e51c64b4637912b2092823663998ef89623d1cdc07e7c63fad4c4930f839e2e9",
-        "a0d969291a9b563065036811a576ff8b2d1c24285bf92d8ab15a5300c9bdc612",
+        "3fb63b1856bcdeb3b5ee6510cabfc46cc756cc7f982b20cd224d17dfb824fe40",
+        "a6e2aa24d0c708e91f9b78035593038d085eb2a1e999257dc20353f171d2dcfa",
     ),
 }
 
