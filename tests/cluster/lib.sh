@@ -59,7 +59,8 @@ stop_pidfile() {
     [ $alive = 0 ] && return 0
     sleep 0.1
   done
-  for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null; done
+  # one may exit by itself between the check above and this KILL: that is not an error (set -e)
+  for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null || true; done
   for (( i = 0; i < 50; i++ )); do
     alive=0; for p in "${pids[@]}"; do kill -0 "$p" 2>/dev/null && alive=1; done
     [ $alive = 0 ] && return 0
