@@ -270,8 +270,11 @@ class Controller:
         #: for PX4 SIH; False: the Gazebo system's rate-limited yaw the local planner was calibrated with
         self.px4_yaw = px4_yaw
         #: the heading the manual modes hold (StickYaw's lock, stabilized's integrated setpoint);
-        #: NaN: none yet (set again on entering a manual mode)
+        #: NaN: none (unlocked, or not yet since a manual mode was entered)
         self.yaw_lock = math.nan
+        #: flying a manual mode now: entering one starts its yaw stick filter at rest, as PX4's
+        #: FlightModeManager constructs a fresh flight task at every mode switch
+        self.in_manual = False
         self.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self.ramp = 0.0  # seconds into the takeoff ramp
         self.of_ramp = 1e9  # seconds into an offboard takeoff (the vehicle restarts it while landed)
@@ -452,7 +455,7 @@ class Controller:
     def _yaw(self, dt: float, yaw: float, target: float) -> float:
         """The yaw rate command towards ``target`` (NaN: hold the setpoint)."""
         lim = self.lim
-        self.yaw_lock = math.nan
+        self.in_manual = False
         if self.px4_yaw:
             # FlightTaskAuto::_limitYawRate: the setpoint moves towards the target at
             # MPC_YAWRAUTO_MAX at most (no acceleration limit in v1.15's auto modes), and its rate
@@ -608,13 +611,13 @@ class Controller:
         az = self._z_loops(dt, z, vz, False)
         self.vsx, self.vsy = cx, cy
         ax, ay = self._limit_tilt(*self._velocity_pid(dt, cx - vx, cy - vy, az), lim.tilt_max)
+        self.in_manual = False
         if goal.yawspeed == goal.yawspeed and goal.yaw != goal.yaw:
             # PositionControl: no yaw, so the yaw setpoint is the heading and the rate is fed forward
             self.yaw_sp = yaw
             self.yawrate_sp = goal.yawspeed
             yr = goal.yawspeed
         elif self.px4_yaw:
-            self.yaw_lock = math.nan
             # no flight task in offboard: the client's yaw (and yawspeed, fed forward) go to the
             # attitude controller as they are, limited only by MC_YAWRATE_MAX
             if goal.yaw == goal.yaw:
@@ -637,6 +640,10 @@ class Controller:
         climb = (sz - 0.5) * 2.0
         climb = 0.0 if abs(climb) < dz else climb
         c, s = math.cos(yaw), math.sin(yaw)
+        if not self.in_manual:  # a manual mode just entered: its flight task starts at rest
+            self.in_manual = True
+            self.yaw_lock = math.nan
+            self.yawrate_sp = 0.0
         if goal.kind is GoalKind.ATTITUDE:
             bx, by = GRAVITY * math.tan(sx * lim.man_tilt_max), GRAVITY * math.tan(sy * lim.man_tilt_max)
             az = -(sz / 0.5 - 1.0) * GRAVITY

@@ -129,3 +129,24 @@ def test_a_yaw_stick_turns_and_the_released_heading_is_locked_and_held():
     off = np.degrees(np.remainder(held - v.ctrl.yaw_lock + math.pi, math.tau) - math.pi)
     assert abs(off.mean()) < 1.0, off
     assert np.abs(off).max() < 4.0, off
+
+
+def test_entering_position_mode_mid_turn_starts_the_yaw_stick_at_rest():
+    """PX4's FlightModeManager constructs a fresh flight task at a mode switch: switched to position
+    mode in the middle of an auto turn, with the yaw stick centred, the turn's feed-forward is not
+    carried on (StickYaw's filter starts at 0) and the heading is locked where it is."""
+    from uavtest.sitl.mc_pos_control import Controller, Goal, GoalKind, Limits
+
+    ctrl = Controller(Limits.of(ParamStore()))
+    ctrl.reset(0.0, 0.0, -5.0, 0.0, 0.0, 0.0, 0.0)
+    turn = Goal(GoalKind.POSITION, x=0.0, y=0.0, z=-5.0, yaw=math.pi)
+    yaw = 0.0
+    for _ in range(50):  # 1 s into a 180 degree turn, the vehicle following the setpoint
+        ctrl.update(0.02, turn, 0.0, 0.0, -5.0, 0.0, 0.0, 0.0, yaw)
+        yaw = ctrl.yaw_sp
+    assert ctrl.yawrate_sp > math.radians(30.0)  # the auto turn's feed-forward
+    sticks = Goal(GoalKind.VELOCITY, sticks=(0.0, 0.0, 0.5, 0.0))
+    rate = ctrl.update(0.02, sticks, 0.0, 0.0, -5.0, 0.0, 0.0, 0.0, yaw)[3]
+    assert ctrl.yawrate_sp == 0.0
+    assert ctrl.yaw_lock == pytest.approx(yaw)
+    assert abs(rate) < 1e-9  # on the locked heading: no rate asked
