@@ -31,4 +31,6 @@ class YawRateGains:
     @classmethod
     def of(cls, params: ParamStore) -> YawRateGains:
         k = params["MC_YAWRATE_K"]
-        return cls(p=k * params["MC_YAWRATE_P"], i=params["MC_YAWRATE_I"], int_lim=params["MC_YR_INT_LIM"])
+        # MulticopterRateControl: setPidGains(rate_k x P, rate_k x I, rate_k x D)
+        p, i = params["MC_YAWRATE_P"], params["MC_YAWRATE_I"]
+        return cls(p=k * p, i=k * i, int_lim=params["MC_YR_INT_LIM"])

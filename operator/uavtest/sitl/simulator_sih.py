@@ -31,7 +31,7 @@ TAU_TILT = 0.06  # s
 #: the competition's system under test (PX4 in Gazebo, iris; the local planner's calibration):
 #: a first-order horizontal acceleration response without delay
 TAU_TILT_GAZEBO = 0.12  # s
-TAU_THRUST = 0.05  # s, vertical thrust response
+TAU_THRUST = 0.05  # s: SIH_T_TAU, the motors' lag: the vertical thrust's response, and the yaw torque's
 DRAG_LINEAR = 1.0  # 1/s: PX4 SIH's first-order drag, SIH_KDV / SIH_MASS (1.0 N s/m / 1 kg)
 DRAG_QUADRATIC = 0.0  # 1/m: SIH has none
 #: the competition's system under test flies Gazebo's iris, far less draggy than SIH: (linear 1/s,
@@ -39,7 +39,7 @@ DRAG_QUADRATIC = 0.0  # 1/m: SIH has none
 DRAG_GAZEBO_IRIS = (0.15, 0.06)
 DRAG_VERTICAL = 0.8  # 1/s
 #: PX4 SIH's yaw (``sih.cpp``, the quadrotor's defaults): the yaw moment is SIH_Q_MAX (0.1 N m) x
-#: (u0 + u1 - u2 - u3) of the motor commands, which reach them through SIH_T_TAU's lag. PX4's
+#: (u0 + u1 - u2 - u3) of the motor commands, which reach them through SIH_T_TAU's lag (``TAU_THRUST``). PX4's
 #: control allocation normalises its yaw column (``ControlAllocationPseudoInverse``, the multirotor's
 #: normalize_rpy): one unit of normalised yaw torque moves each rotor's command by one unit, so it is
 #: 4 x 0.1 N m; with SIH_IZZ 0.03 kg m^2 that is this angular acceleration (rad/s^2). The sequential
@@ -47,7 +47,6 @@ DRAG_VERTICAL = 0.8  # 1/s
 #: headroom. SIH_KDW (0.025 N m s) damps the rate.
 YAW_TORQUE_GAIN = 4 * 0.1 / 0.03
 YAW_DAMPING = 0.025 / 0.03  # 1/s
-MOTOR_TAU = 0.05  # s: SIH_T_TAU
 #: the competition's system under test (Gazebo, iris): its yaw rate follows the command with this lag
 TAU_YAW_GAZEBO = 0.08  # s
 #: the collective thrust (0..1) that holds SIH's quadrotor up: SIH_MASS * g / (4 * SIH_T_MAX)
@@ -301,7 +300,7 @@ class Body:
             if f > 0.0:
                 i = self.yaw_int + f * g.i * e * dt
                 self.yaw_int = g.int_lim if i > g.int_lim else (-g.int_lim if i < -g.int_lim else i)
-            self.yaw_torque += (u - self.yaw_torque) * (dt / MOTOR_TAU)
+            self.yaw_torque += (u - self.yaw_torque) * (dt / TAU_THRUST)
             self.yawrate += (YAW_TORQUE_GAIN * self.yaw_torque - YAW_DAMPING * self.yawrate) * dt
         self.yaw += self.yawrate * dt
         if self.yaw > math.pi:

@@ -8,10 +8,14 @@ import math
 import numpy as np
 import pytest
 
+from uavtest.px4.modes import MainMode, NavState
+from uavtest.sitl.mav import MavCmd, Msg
 from uavtest.sitl.mc_att_control import YawGains, yaw_rate_setpoint
 from uavtest.sitl.mc_rate_control import YawRateGains
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.simulator_sih import HOVER_THRUST, YAW_DAMPING, YAW_TORQUE_GAIN, Body
+
+from .test_vehicle import GCS, command, ready_vehicle
 
 GAINS = YawGains.of(ParamStore())
 
@@ -78,6 +82,23 @@ def test_the_rate_loop_holds_a_rate_against_sihs_damping_with_its_integral():
     assert body.yawrate == pytest.approx(0.5, abs=0.01)
 
 
+def test_a_disarmed_body_has_no_yaw_rate_loop():
+    """Motors off (disarmed, falling): no rate controller runs and no yaw torque acts, whatever rate
+    is asked; a spin left over only decays with SIH's damping."""
+    body = _hovering_body(YawRateGains.of(ParamStore()))
+    for _ in range(100):
+        body.step(0.004, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+    spinning = body.yawrate
+    assert spinning > 0.3
+    body.z = -100.0  # high enough to fall for the whole second
+    body.motors = False
+    body.step(0.004, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+    assert body.yaw_int == 0.0 and body.yaw_torque == 0.0
+    for _ in range(250):  # 1 s
+        body.step(0.004, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+    assert body.yawrate == pytest.approx(spinning * math.exp(-YAW_DAMPING * 1.004), rel=0.02)
+
+
 def test_the_local_planners_system_keeps_its_first_order_yaw():
     body = _hovering_body(None)
     for _ in range(int(0.08 / 0.004)):
@@ -86,19 +107,8 @@ def test_the_local_planners_system_keeps_its_first_order_yaw():
 
 
 def _posctl_vehicle():
-    from uavtest.px4.modes import MainMode, NavState
-    from uavtest.sitl.mav import MavCmd, Msg
-    from uavtest.sitl.vehicle import SimConfig, Vehicle
-
-    gcs = (255, 190)
-
-    def command(v, cmd, *params):
-        fields = {"command": cmd, "target_system": 1, "target_component": 1}
-        fields.update({f"param{i}": p for i, p in enumerate(params, start=1)})
-        v.receive(Msg("COMMAND_LONG", fields, *gcs))
-
-    v = Vehicle(SimConfig())
-    v.fly_until(lambda v: v.ready, 5_000_000)
+    """A vehicle taken off to 5 m and in position mode, and a function holding the sticks."""
+    v = ready_vehicle()
     command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
     command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, 488.0 + 5)
     v.fly_until(lambda v: v.nav_state == NavState.AUTO_LOITER, 30_000_000)
@@ -107,7 +117,7 @@ def _posctl_vehicle():
     def sticks(r: int, seconds: float) -> list[float]:
         headings = []
         for _ in range(round(seconds * 10)):
-            v.receive(Msg("MANUAL_CONTROL", {"target": 1, "x": 0, "y": 0, "z": 500, "r": r}, *gcs))
+            v.receive(Msg("MANUAL_CONTROL", {"target": 1, "x": 0, "y": 0, "z": 500, "r": r}, *GCS))
             v.advance(v.time_us + 100_000)
             headings.append(v.st.yaw)
         return headings
