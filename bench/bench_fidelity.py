@@ -142,6 +142,12 @@ class Flights:
     boot_x: list = dataclasses.field(default_factory=list)
     boot_y: list = dataclasses.field(default_factory=list)
 
+    def joined(self, other: Flights) -> Flights:
+        """These flights and ``other``'s, every measurement together."""
+        return Flights(
+            **{f.name: getattr(self, f.name) + getattr(other, f.name) for f in dataclasses.fields(self)}
+        )
+
 
 def _measure(ulog: ULog, into: Flights) -> None:
     traj = trajectory_from_ulog(ulog)
@@ -331,6 +337,34 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
     return t, ok
 
 
+def yardstick_table(name: str, shared: Flights, yours: Flights, ours: Flights) -> Table:
+    """The target's yardstick held to PX4 itself: the ``--px4-logs`` flights against the shared
+    logs alone, beside the built-in flights against them, each mean with the shared logs' own range.
+
+    The shared logs of a plan are few noise realizations (SIH's ``srand(1234)``), so their range
+    is narrow; this says whether other flights of PX4 v1.15 SIH fall inside it.
+    """
+    t = Table(
+        title=f"{name}: against the {len(shared.figures)} shared PX4 logs alone, "
+        f"your {len(yours.figures)} PX4 flights and the built-in ones"
+    )
+    t.add_column("figure")
+    t.add_column("shared PX4 vs shared PX4", justify="right")
+    t.add_column("your PX4 vs shared PX4", justify="right")
+    t.add_column("built-in vs shared PX4", justify="right")
+    ranges = pairs_within(shared.figures)
+    pairs = (pairs_between(yours.figures, shared.figures), pairs_between(ours.figures, shared.figures))
+    for attr, label, unit in FIGURES:
+        theirs = spread([getattr(p, attr) for p in ranges]) if ranges else None
+        cells = []
+        for between in pairs:
+            mean = spread([getattr(p, attr) for p in between])
+            mark = "" if theirs is None else (" (inside)" if mean.inside(theirs) else " [red](outside)[/red]")
+            cells.append(f"{mean.mean:.2f}{mark}")
+        t.add_row(f"{label}, {unit}", str(theirs or "—"), *cells)
+    return t
+
+
 def _spread(values: list[float]) -> str:
     return f"{np.mean(values):.3f} ({min(values):.3f}–{max(values):.3f}, {len(values)} flights)"
 
@@ -377,13 +411,17 @@ def main() -> None:
         plan, logs = PLANS[name]
         if plan is None:
             plan = competition(int(name[-1]))
-        px4 = px4_flights(logs, extra.get(name, []))
+        shared = px4_flights(logs)
+        yours = px4_flights([], extra.get(name, []))
+        px4 = shared.joined(yours)
         if name in extra:
             console.print(f"{name}: {len(logs)} shared PX4 logs and {len(extra[name])} from --px4-logs")
         ours, wall = builtin_flights(plan, args.seeds)
         t, ok = table(name, px4, ours)
         all_ok &= ok or len(px4.figures) < 2
         console.print(t)
+        if name in extra:
+            console.print(yardstick_table(name, shared, yours, ours))
         per = statistics.mean(f.flight_time for f in ours.figures)
         console.print(f"  {args.seeds} built-in flights in {wall:.1f} s wall ({per:.0f} s flight each)\n")
     console.print(

@@ -7,6 +7,11 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
+from uavtest.analysis.fidelity import flight_figures, pairs_between
+from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
+
 BENCH = Path(__file__).resolve().parents[3] / "bench" / "bench_fidelity.py"
 
 
@@ -31,6 +36,25 @@ def test_more_px4_flights_of_a_plan_are_measured_with_the_shared_ones(shared_dat
     assert "vs PX4 v1.15 SIH (5 runs)" in run.stdout
     # the duplicate of run2 makes one PX4 pair identical: PX4's own range now starts at 0.00
     assert "(0.00–" in run.stdout
+
+
+def test_your_px4_flights_are_held_to_the_shared_logs_range_beside_the_built_in(
+    shared_data: Path, tmp_path: Path
+):
+    own = tmp_path / "replica-0"
+    own.mkdir()
+    (own / "flight.ulg").symlink_to(shared_data / "px4-sih" / "competition-mission1-run2.ulg")
+    args = ("--seeds", "2", "--plans", "mission1", "--px4-logs", f"mission1={tmp_path}")
+    run = _bench(*args, data=shared_data)
+    assert "against the 4 shared PX4 logs alone, your 1 PX4 flights" in run.stdout, run.stdout + run.stderr
+    runs = ("run1", "run2", "run3", "sf1")
+    logs = [shared_data / "px4-sih" / f"competition-mission1-{r}.ulg" for r in runs]
+    shared = [flight_figures(trajectory_from_ulog(read_ulog(log))) for log in logs]
+    # run2 against the four shared logs, itself among them (a DTW of 0)
+    expected = np.mean([p.dtw for p in pairs_between([shared[1]], shared)])
+    rows = [line for line in run.stdout.splitlines() if "DTW" in line and "side)" in line]
+    assert len(rows) == 1, run.stdout
+    assert rows[0].split("│")[3].strip().startswith(f"{expected:.2f} ("), rows[0]
 
 
 def test_a_px4_logs_argument_names_the_plan_and_a_folder_with_logs(shared_data: Path, tmp_path: Path):
