@@ -103,6 +103,10 @@ class LandDetector:
             return Transition.RESTING
         return None
 
+    def state(self) -> tuple[bool, bool, bool]:
+        """Ground contact, maybe landed, landed: PX4 publishes the topic when any of them changes."""
+        return self.ground_contact, self.maybe_landed, self.landed
+
     def _z_vel_max(self) -> float:
         p = self.params
         return min(p["LNDMC_Z_VEL_MAX"], min(p["MPC_LAND_CRWL"], p["MPC_LAND_SPEED"]) / 1.2)

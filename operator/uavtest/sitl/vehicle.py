@@ -192,6 +192,7 @@ class Vehicle:
         self.limits = Limits.of(self.params)
         self.ctrl = Controller(self.limits, yaw_rate_scale=yaw_rate_scale, px4_yaw=not planner)
         self.land = LandDetector(self.params, self.ctrl, land_jitter, self.est)
+        self._land_logged = self.land.state()  # what vehicle_land_detected last said in the log
         self.nav = Navigator(self.params, self.proj, self.home_alt, random.Random(f"{seed}:navigator"))
         if planner:  # PX4-Avoidance's local planner flies the auto modes' waypoints (COM_OBS_AVOID 1)
             camera = DepthCamera(self.world, random.Random(f"{seed}:depth"))
@@ -892,13 +893,20 @@ class Vehicle:
         if commander.status_dirty or tick % (CONTROL_EVERY * 50) == 0:  # on change, else 1 Hz
             commander.status_dirty = False
             self._log_status(t)
+        elif self.land.state() != self._land_logged:
+            # PX4's land detector publishes whenever a stage changes (ground contact, maybe landed)
+            self._log_land(t)
 
     def _log_status(self, t: int) -> None:
         c, rec = self.commander, self.recorder
         rec.data(c.status(t))
-        rec.data(self.land.topic(t, self.body, c.crashed, self.goal.kind))
+        self._log_land(t)
         rec.data(topics.ActuatorArmed(t, c.armed, False, c.ready, False, False, False))
         rec.data(self.sim.failure_detector.topic(t))
+
+    def _log_land(self, t: int) -> None:
+        self.recorder.data(self.land.topic(t, self.body, self.commander.crashed, self.goal.kind))
+        self._land_logged = self.land.state()
 
     def _log_setpoint(self, t: int, g: Goal) -> None:
         kind = _SETPOINT_TYPE.get(g.kind)

@@ -234,18 +234,20 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: mc_att_control's MC_YAW_P law, mc_rate_control's yaw PI and SIH's yaw torque, damping and
 #: allocation headroom), and the manual modes' StickYaw (MPC_MAN_Y_TAU, in the parameter list: the
 #: parameter streams too) and heading lock; and for EKF2's heading error low-passed at 0.3 s (as
-#: smooth as PX4 SIH's logged heading) (stop 22).
+#: smooth as PX4 SIH's logged heading) (stop 22); the logs again (the flight and the MAVLink
+#: streams unchanged) for vehicle_land_detected published when ground contact or maybe landed
+#: changes, as PX4's land detector does, not only on landed or at 1 Hz (stop 23).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "445c6be540c04b9f4e890c884204e57bb79e6a78d045bb8792126059a18bf1b1",
+        "3165f678b33c5f9fb97c4e461ef3acb1092690328808701c64bb75b4f492c409",
         "7c909e4a31b5a8f359674a1dfd1bfe2e1ef0cc2c2de665beff1613fb0ee4aa6b",
     ),
     "manual_and_rtl": (
-        "9ad2a737905d9026dcaab0034fa344b5c415eccdd3036d0996aec0023dcee273",
+        "734a9997f044940aadbbea110b7929784218564482afa0639fe6e4c0bd1d34a9",
         "1a71ecf8e652e2c1bbca5f53eb4b5f84b26cf5760fbe3034d4f272ad73012ece",
     ),
     "datalink_loss": (
-        "8e222fd70d035b6d4a9ace8015c8f4cbe340091faa1512d44ea4e771c983e017",
+        "64ea05421838b2d095946e4b2e9887aebe7daf2e7ee927a8207854fc00d452fc",
         "91190aa28c8ca432cf3681a868ba489c21b4519c924cbd1effa551ec9b99fd35",
     ),
     "crash": (

@@ -4,13 +4,16 @@ PX4's multicopter land detector only lets ground contact count under climb-rate 
 descent is commanded, so a vehicle whose thrust is still ramping up for takeoff never "lands".
 """
 
+import io
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from uavtest.px4.modes import NavState
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.mav import MavCmd, Msg
+from uavtest.sitl.recorder import MemorySink
 
 from .conftest import competition
 from .test_vehicle import command, ready_vehicle
@@ -194,3 +197,31 @@ def test_a_small_shift_after_touchdown_does_not_delay_the_landing():
     for shift in (-0.5, 0.0, 0.5):
         _, after, _ = _touchdown_with_shift(shift)
         assert 1.3 <= after <= 2.0, f"shift {shift} m: landed {after:.1f} s after touchdown"
+
+
+def _stages(log) -> tuple[float, float]:
+    """vehicle_land_detected's last landing: ground contact and maybe landed, s before landed."""
+    d = log.get_dataset("vehicle_land_detected").data
+    t = d["timestamp"] / 1e6
+    landed_at = t[np.flatnonzero((d["landed"][1:] == 1) & (d["landed"][:-1] == 0))[-1] + 1]
+
+    def since(field: str) -> float:
+        rises = np.flatnonzero((d[field][1:] == 1) & (d[field][:-1] == 0)) + 1
+        return landed_at - t[rises[t[rises] <= landed_at][-1]]
+
+    return since("ground_contact"), since("maybe_landed")
+
+
+def test_the_log_shows_the_land_detectors_stages_as_px4_publishes_them(shared_data: Path):
+    """PX4's land detector publishes vehicle_land_detected whenever ground contact or maybe landed
+    changes, so a PX4 log shows the stages: ground contact 0.7 s and maybe landed 0.3 s before
+    landed (LNDMC_TRIG_TIME / 3 each). The built-in log published only on landed or at 1 Hz."""
+    from pyulog import ULog
+
+    px4 = [_stages(ULog(str(p))) for p in sorted((shared_data / "px4-sih").glob("competition-mission*.ulg"))]
+    config, items = competition(shared_data, 2, 0)
+    sink = MemorySink()
+    fly_mission(config, items, sink=sink)
+    contact, maybe = _stages(ULog(io.BytesIO(sink.logs[0])))
+    assert min(c for c, _ in px4) - 0.05 <= contact <= max(c for c, _ in px4) + 0.05, (px4, contact)
+    assert min(m for _, m in px4) - 0.05 <= maybe <= max(m for _, m in px4) + 0.05, (px4, maybe)
