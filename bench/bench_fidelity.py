@@ -59,6 +59,7 @@ from uavtest.analysis.fidelity import (
     pooled_autocorrelation,
     spread,
     velocity_errors,
+    vertical_estimate_errors,
 )
 from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
 from uavtest.sitl.geo import Projection
@@ -134,6 +135,8 @@ class Flights:
     attitude: list[AttitudeResponse] = dataclasses.field(default_factory=list)
     #: per flight that logs its ground truth: EKF2's position and velocity error std against it
     truth: list[tuple[float, float]] = dataclasses.field(default_factory=list)
+    #: per such flight: EKF2's altitude (its slow drift left out) and climb-rate error std, flying
+    vertical_truth: list[tuple[float, float]] = dataclasses.field(default_factory=list)
     #: per such flight: by how many seconds of velocity the estimate leads the truth
     lead: list[float] = dataclasses.field(default_factory=list)
     #: per such flight: EKF2's velocity error std fore-aft and sideways (body frame)
@@ -174,6 +177,15 @@ def _measure(ulog: ULog, into: Flights) -> None:
         truth = np.column_stack([gt[k] for k in cols])
         flown = (traj.t[0], traj.t[-1])
         into.truth.append(estimate_errors(t, estimate, gt["timestamp"] / 1e6, truth, flown))
+        into.vertical_truth.append(
+            vertical_estimate_errors(
+                t,
+                np.column_stack([lp["z"], lp["vz"]]),
+                gt["timestamp"] / 1e6,
+                np.column_stack([gt["z"], gt["vz"]]),
+                flown,
+            )
+        )
         into.lead.append(estimate_lead(t, estimate, gt["timestamp"] / 1e6, truth, flown))
         velocity = np.column_stack([lp["vx"], lp["vy"], lp["heading"]])
         into.body.append(body_frame_errors(t, velocity, gt["timestamp"] / 1e6, truth[:, 2:], flown))
@@ -299,6 +311,14 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "EKF2 error against the ground truth: position / velocity std, m, m/s",
             _pair_means(px4_all.truth),
             _pair_means(ours_all.truth),
+            "",
+            "",
+        )
+        t.add_row(
+            "EKF2 vertical error against the ground truth while flying: altitude (its 10 s drift "
+            "left out) / climb-rate std, m, m/s",
+            _pair_means(px4_all.vertical_truth),
+            _pair_means(ours_all.vertical_truth),
             "",
             "",
         )

@@ -64,6 +64,7 @@ __all__ = [
     "pooled_autocorrelation",
     "spread",
     "velocity_errors",
+    "vertical_estimate_errors",
 ]
 
 NORMALISED_POINTS = 200
@@ -181,6 +182,41 @@ def estimate_errors(
     g = _grid(window, rate, "estimate errors")
     std = _errors_on(g, t, estimate, t_truth, truth, 4).std(axis=0)
     return float((std[0] + std[1]) / 2), float((std[2] + std[3]) / 2)
+
+
+VERTICAL_TREND_S = 10.0  # s: the altitude error's slower drift, left out of vertical_estimate_errors
+VERTICAL_AIRBORNE = 1.0  # m: truly this far above the window's lowest point, the vehicle is flying
+
+
+def vertical_estimate_errors(
+    t: np.ndarray,
+    estimate: np.ndarray,
+    t_truth: np.ndarray,
+    truth: np.ndarray,
+    window: tuple[float, float],
+    rate: float = 10.0,
+) -> tuple[float, float]:
+    """How far the estimated altitude and climb rate are from the ground truth while flying: the
+    standard deviation of the altitude error about its ``VERTICAL_TREND_S`` moving mean (EKF2's
+    GNSS/baro-referenced altitude drifts slowly; this is its faster wander) and of the climb-rate
+    error, over the samples where the truth is ``VERTICAL_AIRBORNE`` above its lowest point in the
+    window, the ground (touchdown and EKF2's shift on the ground left out).
+    ``estimate``, ``truth``: (N, 2) columns z, vz."""
+    g = _grid(window, rate, "vertical estimate errors")
+    e = _errors_on(g, t, estimate, t_truth, truth, 2)
+    altitude = -np.interp(g, t_truth, truth[:, 0])
+    height = altitude - altitude.min()
+    n = max(1, int(VERTICAL_TREND_S * rate))
+    if len(g) <= n:
+        raise BadInput("vertical estimate errors: the window is shorter than the trend", value=len(g) / rate)
+    flying = height > VERTICAL_AIRBORNE
+    if flying.sum() < 2:
+        raise BadInput("vertical estimate errors: the truth never flew in the window")
+    # the moving mean of the flying samples alone: the shift on the ground does not leak into it
+    box = np.ones(n)
+    weight = np.maximum(np.convolve(flying, box, mode="same"), 1)
+    trend = np.convolve(e[:, 0] * flying, box, mode="same") / weight
+    return float((e[flying, 0] - trend[flying]).std()), float(e[flying, 1].std())
 
 
 def _grid(window: tuple[float, float], rate: float, what: str) -> np.ndarray:

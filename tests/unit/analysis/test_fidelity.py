@@ -20,6 +20,7 @@ from uavtest.analysis.fidelity import (
     pooled_autocorrelation,
     spread,
     velocity_errors,
+    vertical_estimate_errors,
 )
 from uavtest.analysis.trajectory import Trajectory
 from uavtest.errors import BadInput
@@ -224,3 +225,51 @@ def test_boot_time_correlation_tells_one_noise_realization_from_independent_ones
         boot_time_correlation(same[:1])
     with pytest.raises(BadInput, match="overlap"):
         boot_time_correlation([(t, shared), (t + 100.0, shared)])
+
+
+def _vertical_truth() -> tuple[np.ndarray, np.ndarray]:
+    """On the ground 5 s, climb to 10 m at 1 m/s, hold, descend at 1 m/s, 20 s on the ground:
+    (t, truth columns z, vz) at 50 Hz."""
+    t = np.arange(0.0, 130.0, 0.02)
+    h = np.clip(np.minimum(t - 5.0, 110.0 - t), 0.0, 10.0)
+    vz = -np.gradient(h, t)
+    return t, np.column_stack([-h, vz])
+
+
+def test_vertical_estimate_errors_keep_the_fast_wander_and_leave_out_the_drift_and_the_ground() -> None:
+    t, truth = _vertical_truth()
+    rng = np.random.default_rng(3)
+    # a 0.1 m wander correlated over about 1 s (a 1 s moving mean of white noise, rescaled)
+    wander = np.convolve(rng.normal(0.0, 1.0, len(t)), np.ones(50) / 50, mode="same")
+    wander *= 0.1 / wander.std()
+    drift = 0.6 * np.sin(2 * np.pi * t / 120.0)  # EKF2's slow GNSS/baro drift: left out
+    climb_error = rng.normal(0.0, 0.15, len(t))
+    ground = np.where(t > 110.0, 1.5, 0.0)  # the estimate's shift after touchdown: left out
+    estimate = truth + np.column_stack([wander + drift + ground, climb_error])
+    alt, climb = vertical_estimate_errors(t, estimate, t, truth, (0.0, 120.0))
+    assert alt == pytest.approx(0.1, abs=0.015)
+    assert climb == pytest.approx(0.15, abs=0.01)
+    assert vertical_estimate_errors(t, truth, t, truth, (0.0, 120.0)) == pytest.approx((0.0, 0.0), abs=1e-9)
+
+
+def test_vertical_estimate_errors_need_a_flight_in_the_window() -> None:
+    t, truth = _vertical_truth()
+    with pytest.raises(BadInput, match="never flew"):
+        vertical_estimate_errors(t, truth, t, truth, (111.0, 130.0))
+    with pytest.raises(BadInput, match="shorter than the trend"):
+        vertical_estimate_errors(t, truth, t, truth, (20.0, 25.0))
+
+
+def test_vertical_estimate_errors_against_px4_sihs_ground_truth(square_log) -> None:
+    """PX4 v1.15 SIH's altitude estimate wanders about a decimetre around the truth in flight
+    (GNSS altitude noise 0.5 m, baro 1 Pa in SIH's sensor simulators), its climb rate 0.1-0.2 m/s."""
+    lp = square_log.get_dataset("vehicle_local_position").data
+    gt = square_log.get_dataset("vehicle_local_position_groundtruth").data
+    alt, climb = vertical_estimate_errors(
+        lp["timestamp"] / 1e6,
+        np.column_stack([lp["z"], lp["vz"]]),
+        gt["timestamp"] / 1e6,
+        np.column_stack([gt["z"], gt["vz"]]),
+        (136.5, 176.0),
+    )
+    assert 0.05 < alt < 0.2 and 0.08 < climb < 0.25
