@@ -182,31 +182,33 @@ def track_target(
 ) -> tuple[float, float, float, bool]:
     """Where a POSITION goal's trajectory heads now: FlightTaskAuto's internal waypoints.
 
-    ``FlightTaskAuto::_getCurrentState`` / ``_updateInternalWaypoints`` (PX4 v1.15), in 3-D as
-    PX4 computes them (``Vector3f``): with a previous waypoint, the vehicle follows the line from
-    it to the target; when it is more than the acceptance radius off that line ("offtrack",
-    altitude included) it heads for the closest point of the line first, and when the previous
-    waypoint is still ahead of it, for that waypoint first. Returns (x, y, z, via): via is True
-    while heading for such an internal waypoint.
+    ``FlightTaskAuto::_getCurrentState`` / ``_updateInternalWaypoints`` (PX4 v1.15), in the
+    horizontal plane as PX4 checks them since v1.13 ("mc_auto: only check for offtrack, infront and
+    behind in XY-plane"): with a previous waypoint, the vehicle follows the line from it to the
+    target; when it is more than the acceptance radius beside that line ("offtrack") it heads for
+    the closest point of the line first, at the target's altitude (``_closest_pt``), and when the
+    previous waypoint is still ahead of it, for that waypoint first. A leg without horizontal
+    length has no track. Returns (x, y, z, via): via is True while heading for such an internal
+    waypoint.
     """
     px, py, pz = goal.prev
     if px != px:
         return goal.x, goal.y, goal.z, False
-    ux, uy, uz = goal.x - px, goal.y - py, goal.z - pz
-    length = math.sqrt(ux * ux + uy * uy + uz * uz)
+    ux, uy = goal.x - px, goal.y - py
+    length = math.hypot(ux, uy)
     if length < 1e-6:
         return goal.x, goal.y, goal.z, False
-    ux, uy, uz = ux / length, uy / length, uz / length
-    if ux * (goal.x - x) + uy * (goal.y - y) + uz * (goal.z - z) < 0.0:  # target behind: straight to it
+    ux, uy = ux / length, uy / length
+    if ux * (goal.x - x) + uy * (goal.y - y) < 0.0:  # target behind: straight to it
         return goal.x, goal.y, goal.z, False
-    dx, dy, dz = x - px, y - py, z - pz
-    along = ux * dx + uy * dy + uz * dz
-    if along < 0.0 and dx * dx + dy * dy + dz * dz > acc_rad * acc_rad:  # previous waypoint in front
+    dx, dy = x - px, y - py
+    along = ux * dx + uy * dy
+    if along < 0.0 and dx * dx + dy * dy > acc_rad * acc_rad:  # previous waypoint in front
         return px, py, pz, True
-    cx, cy, cz = px + ux * along, py + uy * along, pz + uz * along
-    ox, oy, oz = x - cx, y - cy, z - cz
-    if ox * ox + oy * oy + oz * oz > acc_rad * acc_rad:  # offtrack: back to the closest point of the track
-        return cx, cy, cz, True
+    cx, cy = px + ux * along, py + uy * along
+    ox, oy = x - cx, y - cy
+    if ox * ox + oy * oy > acc_rad * acc_rad:  # offtrack: back to the closest point of the track
+        return cx, cy, goal.z, True
     return goal.x, goal.y, goal.z, False
 
 

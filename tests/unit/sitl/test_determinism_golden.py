@@ -236,11 +236,13 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: parameter streams too) and heading lock; and for EKF2's heading error low-passed at 0.3 s (as
 #: smooth as PX4 SIH's logged heading) (stop 22); the logs again (the flight and the MAVLink
 #: streams unchanged) for vehicle_land_detected published when ground contact or maybe landed
-#: changes, as PX4's land detector does, not only on landed or at 1 Hz (stop 23).
+#: changes, as PX4's land detector does, not only on landed or at 1 Hz (stop 23); and the
+#: mission's flight for FlightTaskAuto's track states judged in the horizontal plane, as PX4 has
+#: since v1.13 (Vector2f; the offtrack point at the target's altitude) (stop 23).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "3165f678b33c5f9fb97c4e461ef3acb1092690328808701c64bb75b4f492c409",
-        "7c909e4a31b5a8f359674a1dfd1bfe2e1ef0cc2c2de665beff1613fb0ee4aa6b",
+        "35b8d6efc251500ea2f96f81d9ae1e9b46508872b1fb4ad24ce5fe14692bb4c6",
+        "0fa013eba7132d260fdbc79341065d880d141ce824032b4cce0806dbb27ce26b",
     ),
     "manual_and_rtl": (
         "734a9997f044940aadbbea110b7929784218564482afa0639fe6e4c0bd1d34a9",

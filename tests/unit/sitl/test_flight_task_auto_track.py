@@ -39,18 +39,24 @@ def test_offtrack_heads_for_the_closest_point_of_the_line() -> None:
     assert track_target(_leg(), 0.53, 20.0, -10.0, 2.0) == (0.0, 50.0, -10.0, False)
 
 
-def test_offtrack_counts_the_altitude_as_px4_does() -> None:
-    """FlightTaskAuto::_getCurrentState measures the distance to the track in 3-D (Vector3f):
-    0.4 m beside and 0.4 m above a level leg is 0.57 m off it, outside NAV_ACC_RAD 0.5."""
-    assert track_target(_leg(), 0.4, 20.0, -10.0, 0.5)[3] is False
-    assert track_target(_leg(), 0.4, 20.0, -10.4, 0.5) == pytest.approx((0.0, 20.0, -10.0, True))
-    # a climbing leg: the closest point of the 3-D line, at its altitude there
+def test_offtrack_is_judged_beside_the_track_not_above_it_as_px4_does() -> None:
+    """FlightTaskAuto::_getCurrentState measures the distance to the track in the horizontal plane
+    (Vector2f, since PX4 v1.13): 0.4 m beside and 0.4 m above a level leg is on track with
+    NAV_ACC_RAD 0.5, however far above; 0.53 m beside it is not."""
+    assert track_target(_leg(), 0.4, 20.0, -10.4, 0.5) == (0.0, 50.0, -10.0, False)
+    assert track_target(_leg(), 0.0, 20.0, -12.0, 0.5) == (0.0, 50.0, -10.0, False)
+    # a climbing leg: the closest point of the line beside the vehicle, at the target's altitude
+    # (_closest_pt's z is _triplet_target(2)), not the line's altitude there
     climb = Goal(GoalKind.POSITION, x=0.0, y=40.0, z=-30.0)
     climb.prev = (0.0, 0.0, -10.0)
-    tx, ty, tz, via = track_target(climb, 0.0, 20.0, -10.0, 0.5)
+    assert track_target(climb, 0.0, 20.0, -10.0, 0.5) == (0.0, 40.0, -30.0, False)
+    tx, ty, tz, via = track_target(climb, 0.6, 20.0, -10.0, 0.5)
     assert via
-    assert tx == pytest.approx(0.0)
-    assert (ty, tz) == pytest.approx((16.0, -18.0))  # (0, 20, -10) projected onto the line
+    assert (tx, ty, tz) == pytest.approx((0.0, 20.0, -30.0))
+    # a purely vertical leg has no track to be off
+    up = Goal(GoalKind.POSITION, x=0.0, y=0.0, z=-30.0)
+    up.prev = (0.0, 0.0, -10.0)
+    assert track_target(up, 2.0, 2.0, -20.0, 0.5) == (0.0, 0.0, -30.0, False)
 
 
 def test_previous_waypoint_in_front_and_target_behind() -> None:
