@@ -314,7 +314,8 @@ class Controller:
         self.ramp = 0.0
         self.stretch = 1.0
         self.speed_prev = 0.0  # PositionSmoothing's _max_speed_previous
-        self.az_ref = 0.0  # the landing descent's vertical acceleration (jerk-limited)
+        self.az_ref = 0.0  # the z trajectory's acceleration (jerk-limited)
+        self.vz_plan = 0.0  # PositionSmoothing's last unsmoothed z velocity setpoint (its constraints)
 
     # ------------------------------------------------------------------ horizontal reference
 
@@ -329,7 +330,12 @@ class Controller:
         final: float = 0.0,
         acc_rad: float = 0.0,
         line: tuple[float, float] | None = None,
+        tz: float | None = None,
     ) -> None:
+        """PositionSmoothing towards (tx, ty) and, given ``tz``, the altitude too: then the
+        velocity setpoint points straight at the 3-D target (``_generateVelocitySetpoint``), the
+        three axes' profiles are synchronized and the vehicle flies a straight line; without it
+        (a landing: z is the descent's own) only x and y."""
         lim = self.lim
         # PositionSmoothing::_generateTrajectory: while the drone is behind the trajectory, its
         # integration time shrinks with the horizontal distance to it (MPC_XY_ERR_MAX)
@@ -354,13 +360,69 @@ class Controller:
                 dist = math.hypot(ex, ey)
         else:
             self.speed_prev = vmax
-        if dist > 1e-6:
-            vdx, vdy = ex / dist * vmax, ey / dist * vmax
+        if tz is not None:
+            self._smooth_3d(dts, ex, ey, tz - self.pz, vmax)
         else:
-            vdx = vdy = 0.0
-        self._smooth(dts, vdx, vdy)
+            if dist > 1e-6:
+                vdx, vdy = ex / dist * vmax, ey / dist * vmax
+            else:
+                vdx = vdy = 0.0
+            self._smooth(dts, vdx, vdy)
         if dist < 0.02 and self.vx * self.vx + self.vy * self.vy < 0.01:
             self.px, self.py, self.vx, self.vy, self.ax, self.ay = tx, ty, 0.0, 0.0, 0.0, 0.0
+        if tz is not None and abs(tz - self.pz) < 0.01 and abs(self.vz) < 0.05:
+            self.pz, self.vz, self.az_ref = tz, 0.0, 0.0
+
+    def _z_constraints(self) -> tuple[float, float]:
+        """FlightTaskAuto::_updateTrajConstraints for z: (MPC_ACC_UP_MAX, MPC_Z_V_AUTO_UP) while the
+        last velocity setpoint climbed, else (MPC_ACC_DOWN_MAX, MPC_Z_V_AUTO_DN)."""
+        lim = self.lim
+        return (lim.acc_up, lim.z_up) if self.vz_plan < 0.0 else (lim.acc_down, lim.z_down)
+
+    def _smooth_3d(self, dts: float, ex: float, ey: float, ez: float, xy_speed: float) -> None:
+        """PositionSmoothing's 3-D velocity setpoint and trajectory: towards (ex, ey, ez) from the
+        trajectory's position at sqrt(xy_speed^2 + z_speed^2), the whole vector scaled down to
+        xy_speed horizontally and to ``_getMaxZSpeed`` vertically (``clampToXYNorm`` /
+        ``clampToZNorm``, only the one axis when both are under 0.5 m/s); the z axis a
+        VelocitySmoothing profile of its own (MPC_ACC_UP/DOWN_MAX, MPC_Z_V_AUTO_UP/DN,
+        MPC_JERK_AUTO), synchronized with x and y."""
+        lim = self.lim
+        acc_z, vmax_z = self._z_constraints()
+        z_speed = min(vmax_z, max_speed_from_distance(lim.jerk, acc_z, abs(ez), 0.0))
+        n = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if n > 1e-6:
+            k = math.sqrt(xy_speed * xy_speed + z_speed * z_speed) / n
+            vd = [ex * k, ey * k, ez * k]
+        else:
+            vd = [0.0, 0.0, 0.0]
+        xy = math.hypot(vd[0], vd[1])
+        if xy > 1e-9 and xy_speed < xy:
+            f = xy_speed / xy
+            if xy_speed < 0.5 and xy < 0.5:
+                vd[0], vd[1] = vd[0] * f, vd[1] * f
+            else:
+                vd = [c * f for c in vd]
+        vz_abs = abs(vd[2])
+        if vz_abs > 1e-9 and z_speed < vz_abs:
+            f = z_speed / vz_abs
+            if z_speed < 0.5 and vz_abs < 0.5:
+                vd[2] *= f
+            else:
+                vd = [c * f for c in vd]
+        self.vz_plan = vd[2]
+        fx = velocity_smoothing.plan(self.ax, self.vx, self.px, vd[0], lim.jerk, lim.acc_hor, lim.vel_max)
+        fy = velocity_smoothing.plan(self.ay, self.vy, self.py, vd[1], lim.jerk, lim.acc_hor, lim.vel_max)
+        fz = velocity_smoothing.plan(self.az_ref, self.vz, self.pz, vd[2], lim.jerk, acc_z, vmax_z)
+        velocity_smoothing.synchronize_axes(
+            (
+                (fx, vd[0], lim.acc_hor, lim.vel_max),
+                (fy, vd[1], lim.acc_hor, lim.vel_max),
+                (fz, vd[2], acc_z, vmax_z),
+            )
+        )
+        self.ax, self.vx, self.px = velocity_smoothing.advance(fx, dts)
+        self.ay, self.vy, self.py = velocity_smoothing.advance(fy, dts)
+        self.az_ref, self.vz, self.pz = velocity_smoothing.advance(fz, dts)
 
     def _smooth(self, dts: float, vdx: float, vdy: float) -> None:
         """PositionSmoothing's x and y trajectories (VelocitySmoothing): a time-optimal
@@ -427,32 +489,23 @@ class Controller:
         self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * evy * dt))
         return pdx + self.ix, pdy + self.iy
 
-    def _z_loops(self, dt: float, z: float, vz: float, position: bool) -> float:
+    def _z_loops(self, dt: float, z: float, vz: float, position: bool, feedforward: bool = True) -> float:
+        """PositionControl vertically: the altitude's P (``position``), the climb rate's PI, and
+        the trajectory's acceleration fed forward (not during the takeoff ramp, as
+        MulticopterPositionControl drops it there)."""
         lim = self.lim
         vzc = self.vz + (lim.z_p * (self.pz - z) if position else 0.0)
         self.vsz = vzc
         e = vzc - vz
         # PX4 SIH climbs at ~90 % of the setpoint for seconds: a slow thrust integrator
         self.iz = max(-4.0, min(4.0, self.iz + Z_I_SCALE * lim.vz_i * e * dt))
-        return lim.vz_p * e + self.iz
+        return lim.vz_p * e + self.iz + (self.az_ref if feedforward else 0.0)
 
     def update_hover_thrust(self, previous: float, new: float) -> None:
         """``PositionControl::updateHoverThrust``: the vertical integrator takes up the change, so
         the thrust is the same before and after the new hover thrust estimate."""
         az = self.acc_sp[2]
         self.iz += (az - GRAVITY) * previous / new + GRAVITY - az
-
-    def _z_reference(self, dt: float, tz: float) -> None:
-        lim = self.lim
-        dz = tz - self.pz
-        vmax = lim.z_down if dz > 0 else lim.z_up
-        vd = math.copysign(min(vmax, math.sqrt(2.0 * 1.0 * abs(dz))), dz)
-        acc = lim.acc_down if vd > self.vz else lim.acc_up
-        step = acc * 0.5 * dt
-        self.vz += max(-step, min(step, vd - self.vz))
-        self.pz += self.vz * dt
-        if abs(dz) < 0.01 and abs(self.vz) < 0.05:
-            self.pz, self.vz = tz, 0.0
 
     def _yaw(self, dt: float, yaw: float, target: float) -> float:
         """The yaw rate command towards ``target`` (NaN: hold the setpoint)."""
@@ -491,7 +544,7 @@ class Controller:
         """(ax, ay, az, yawrate) commands for one controller tick."""
         lim = self.lim
         kind = goal.kind
-        if kind is not GoalKind.LAND:
+        if kind not in (GoalKind.LAND, GoalKind.POSITION, GoalKind.TAKEOFF):
             self.az_ref = 0.0
         if kind is GoalKind.IDLE:
             self.reset(x, y, z, 0.0, 0.0, 0.0, yaw)
@@ -509,8 +562,7 @@ class Controller:
             # the line the trajectory follows: from the previous waypoint, or from where the
             # vehicle is when it heads for an internal waypoint first (FlightTaskAuto's _prev_wp)
             line = (x, y) if via else (goal.prev[:2] if goal.prev[0] == goal.prev[0] else None)
-            self._xy_reference(dt, tx, ty, speed, x, y, final=final, acc_rad=acc_rad, line=line)
-            self._z_reference(dt, tz)
+            self._xy_reference(dt, tx, ty, speed, x, y, final=final, acc_rad=acc_rad, line=line, tz=tz)
             target_yaw = goal.yaw
             if math.isnan(target_yaw) and lim.yaw_mode == 0:
                 # FlightTaskAuto::_set_heading_from_mode: heading towards the (internal) target
@@ -521,16 +573,32 @@ class Controller:
             az = self._z_loops(dt, z, vz, True)
             ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         elif kind is GoalKind.TAKEOFF:
-            self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad)
             self.ramp += dt
-            climb = min(lim.tko_speed, lim.z_up)
-            dz = goal.z - z
-            vd = -min(climb, math.sqrt(2.0 * 0.6 * max(-dz, 0.0)))
-            # PX4's takeoff ramp: the climb-rate setpoint starts below hover (+0.7 m/s down) and
-            # falls at MPC_TKO_SPEED / MPC_TKO_RAMP_T until it reaches the takeoff speed
-            ramped = TKO_RAMP_START - climb / max(lim.tko_ramp, 1e-3) * self.ramp
-            self.vz = max(ramped, vd)
-            self.pz = z
+            h = self.dist_bottom if self.dist_bottom == self.dist_bottom else -z
+            # FlightTaskAuto::_updateTrajConstraints: the takeoff speed and its ramp only below
+            # MPC_LAND_ALT1; above, the takeoff point is a waypoint like any other (MPC_Z_V_AUTO_UP,
+            # MPC_ACC_UP_MAX) and the altitude is tracked
+            high = h >= lim.land_alt1
+            if high:
+                self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad, tz=goal.z)
+            else:
+                self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad)
+                # below it PositionSmoothing's z axis climbs at MPC_TKO_SPEED, accelerating and
+                # braking at MPC_TKO_SPEED / MPC_TKO_RAMP_T at most (jerk-limited), from the
+                # vehicle's altitude (forceSetPosition holds the trajectory there)
+                climb = lim.tko_speed
+                acc = min(lim.acc_up, lim.tko_speed / max(lim.tko_ramp, 1e-3))
+                self.pz = z
+                vd = -min(climb, max_speed_from_distance(lim.jerk, acc, max(z - goal.z, 0.0), 0.0))
+                self.vz_plan = vd
+                fz = velocity_smoothing.plan(self.az_ref, self.vz, self.pz, vd, lim.jerk, acc, climb)
+                self.az_ref, self.vz, _ = velocity_smoothing.advance(fz, dt)
+                self.pz = z
+                # mc_pos_control's takeoff ramp: the climb-rate setpoint starts below hover
+                # (+0.7 m/s down) and its limit rises at MPC_TKO_SPEED / MPC_TKO_RAMP_T
+                ramped = TKO_RAMP_START - climb / max(lim.tko_ramp, 1e-3) * self.ramp
+                if ramped > self.vz:
+                    self.vz, self.az_ref = ramped, 0.0
             target_yaw = goal.yaw
             if math.isnan(target_yaw) and lim.yaw_mode == 0:
                 # FlightTaskAuto::_set_heading_from_mode in the takeoff too: drifted farther than
@@ -538,7 +606,7 @@ class Controller:
                 d = math.hypot(goal.x - x, goal.y - y)
                 if d > lim.acc_rad:
                     target_yaw = math.atan2(goal.y - y, goal.x - x)
-            az = self._z_loops(dt, z, vz, False)
+            az = self._z_loops(dt, z, vz, high, feedforward=self.ramp >= lim.tko_ramp)
             ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         elif kind is GoalKind.LAND:
             self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad)

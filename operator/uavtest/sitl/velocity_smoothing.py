@@ -14,9 +14,10 @@ direction); written from them, not translated line by line.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
-__all__ = ["Profile", "advance", "plan", "plan_given_time", "synchronize"]
+__all__ = ["Profile", "advance", "plan", "plan_given_time", "synchronize", "synchronize_axes"]
 
 
 @dataclass(slots=True)
@@ -124,11 +125,20 @@ def plan_given_time(p: Profile, v_sp: float, total: float, a_max: float, v_max: 
 
 def synchronize(px: Profile, py: Profile, vx_sp: float, vy_sp: float, a_max: float, v_max: float) -> None:
     """``VelocitySmoothing::timeSynchronization`` of x and y: the shorter takes the longer's time."""
-    tx, ty = px.total, py.total
-    if tx > ty and tx > 1e-6:
-        plan_given_time(py, vy_sp, tx, a_max, v_max)
-    elif ty > tx and ty > 1e-6:
-        plan_given_time(px, vx_sp, ty, a_max, v_max)
+    synchronize_axes(((px, vx_sp, a_max, v_max), (py, vy_sp, a_max, v_max)))
+
+
+def synchronize_axes(axes: Sequence[tuple[Profile, float, float, float]]) -> None:
+    """``VelocitySmoothing::timeSynchronization`` of any number of axes, each given as (profile,
+    velocity setpoint, its a_max, its v_max): every axis but the longest takes the longest's time
+    (PositionSmoothing synchronizes x, y and z: the vehicle moves along a straight line)."""
+    longest = max(range(len(axes)), key=lambda i: axes[i][0].total)
+    total = axes[longest][0].total
+    if total <= 1e-6:
+        return
+    for i, (p, v_sp, a_max, v_max) in enumerate(axes):
+        if i != longest:
+            plan_given_time(p, v_sp, total, a_max, v_max)
 
 
 def advance(p: Profile, t: float) -> tuple[float, float, float]:

@@ -238,27 +238,31 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: streams unchanged) for vehicle_land_detected published when ground contact or maybe landed
 #: changes, as PX4's land detector does, not only on landed or at 1 Hz (stop 23); and the
 #: mission's flight for FlightTaskAuto's track states judged in the horizontal plane, as PX4 has
-#: since v1.13 (Vector2f; the offtrack point at the target's altitude) (stop 23).
+#: since v1.13 (Vector2f; the offtrack point at the target's altitude) (stop 23); and every
+#: scenario for PositionSmoothing in three axes (the velocity setpoint straight at the 3-D target,
+#: z's own jerk-limited profile synchronized with x and y), the takeoff's PX4 constraints (its
+#: jerk-limited approach below MPC_LAND_ALT1, a waypoint's above) and PositionControl's vertical
+#: acceleration feed-forward (stop 23).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "35b8d6efc251500ea2f96f81d9ae1e9b46508872b1fb4ad24ce5fe14692bb4c6",
-        "0fa013eba7132d260fdbc79341065d880d141ce824032b4cce0806dbb27ce26b",
+        "c6c96c45772664683306ec270172d0ca9c4ff5f2145582218ca41766799d8937",
+        "6541fa83c5b91046b135b686b09a32272006b1a5ea7bd3a8d51a2e427671f217",
     ),
     "manual_and_rtl": (
-        "734a9997f044940aadbbea110b7929784218564482afa0639fe6e4c0bd1d34a9",
-        "1a71ecf8e652e2c1bbca5f53eb4b5f84b26cf5760fbe3034d4f272ad73012ece",
+        "96fab48af7ec31b29a3e671d9bf30dbe6f5617d87bfd701d64b0e81aad1ea66b",
+        "fd1165ef18981d1d23ee9d9a4ab7d6f6baf504fcff13a29ca357e5cd1922120d",
     ),
     "datalink_loss": (
-        "64ea05421838b2d095946e4b2e9887aebe7daf2e7ee927a8207854fc00d452fc",
-        "91190aa28c8ca432cf3681a868ba489c21b4519c924cbd1effa551ec9b99fd35",
+        "0abfc6dfae481f61e4f4ad6a7b5cc5285edbd8c0d70c30bb632d7384d71607bc",
+        "b864d0b94d63c2fab5ad69d384b605318fc4e16f14777ab972a9a97537fb6bdc",
     ),
     "crash": (
-        "4a8bd5619f87ede64734c8699f12e6e90652dfc7a9231e6c565634be7178bcdd",
-        "b287e6fa1fe11cfb399dd09a350a0009e1a9ce40e2ef9a8e2fa65179996788b2",
+        "d1dd9881d342faa95513677ef1fd9039b9090b3d392ebe3e2d01397e1b862bc9",
+        "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "3fb63b1856bcdeb3b5ee6510cabfc46cc756cc7f982b20cd224d17dfb824fe40",
-        "a6e2aa24d0c708e91f9b78035593038d085eb2a1e999257dc20353f171d2dcfa",
+        "9a6919a9311598d083ea9bd8a0bae1df13acaa60e51fd2f8d60570d80359ced9",
+        "da4d9758d357216c9067bdb48cd5e7d32328af27f15d4477c3f96d7c4b8b358c",
     ),
 }
 
