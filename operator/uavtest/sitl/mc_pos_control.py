@@ -178,7 +178,7 @@ def max_speed_from_distance(jerk: float, accel: float, distance: float, final: f
 
 
 def track_target(
-    goal: Goal, x: float, y: float, z: float, acc_rad: float
+    goal: Goal, x: float, y: float, z: float, acc_rad: float, prev: tuple[float, float, float] | None = None
 ) -> tuple[float, float, float, bool]:
     """Where a POSITION goal's trajectory heads now: FlightTaskAuto's internal waypoints.
 
@@ -188,10 +188,11 @@ def track_target(
     target; when it is more than the acceptance radius beside that line ("offtrack") it heads for
     the closest point of the line first, at the target's altitude (``_closest_pt``), and when the
     previous waypoint is still ahead of it, for that waypoint first. A leg without horizontal
-    length has no track. Returns (x, y, z, via): via is True while heading for such an internal
-    waypoint.
+    length has no track. ``prev`` overrides the goal's previous waypoint (the controller's track
+    start when the triplet has none). Returns (x, y, z, via): via is True while heading for such an
+    internal waypoint.
     """
-    px, py, pz = goal.prev
+    px, py, pz = goal.prev if prev is None else prev
     if px != px:
         return goal.x, goal.y, goal.z, False
     ux, uy = goal.x - px, goal.y - py
@@ -316,6 +317,10 @@ class Controller:
         self.speed_prev = 0.0  # PositionSmoothing's _max_speed_previous
         self.az_ref = 0.0  # the z trajectory's acceleration (jerk-limited)
         self.vz_plan = 0.0  # PositionSmoothing's last unsmoothed z velocity setpoint (its constraints)
+        #: FlightTaskAuto's _triplet_prev_wp without a valid previous waypoint: the vehicle's
+        #: position when the triplet last changed (``_track_key``)
+        self.track_start: tuple[float, float, float] = NO_TRACK
+        self._track_key: tuple[float, ...] | None = None
 
     # ------------------------------------------------------------------ horizontal reference
 
@@ -489,12 +494,20 @@ class Controller:
         self.iy = max(-imax, min(imax, self.iy + lim.vxy_i * evy * dt))
         return pdx + self.ix, pdy + self.iy
 
-    def _z_loops(self, dt: float, z: float, vz: float, position: bool, feedforward: bool = True) -> float:
+    def _z_loops(
+        self, dt: float, z: float, vz: float, position: bool, feedforward: bool = True, auto: bool = False
+    ) -> float:
         """PositionControl vertically: the altitude's P (``position``), the climb rate's PI, and
         the trajectory's acceleration fed forward (not during the takeoff ramp, as
-        MulticopterPositionControl drops it there)."""
+        MulticopterPositionControl drops it there). In the auto modes (``auto``) the climb-rate
+        setpoint is limited as MulticopterPositionControl's setVelocityLimits does with
+        FlightTaskAuto's constraints: up to min(1.2 MPC_Z_V_AUTO_UP, MPC_Z_VEL_MAX_UP), down to
+        max(MPC_Z_VEL_MAX_DN, 1.2 MPC_Z_V_AUTO_DN)."""
         lim = self.lim
         vzc = self.vz + (lim.z_p * (self.pz - z) if position else 0.0)
+        if auto:
+            up = min(max(lim.z_vel_max_up, 1.2 * lim.z_up), lim.z_vel_max_up)
+            vzc = max(-up, min(max(lim.z_vel_max_dn, 1.2 * lim.z_down), vzc))
         self.vsz = vzc
         e = vzc - vz
         # PX4 SIH climbs at ~90 % of the setpoint for seconds: a slow thrust integrator
@@ -529,6 +542,19 @@ class Controller:
         self.yawrate_sp += max(-step, min(step, want - self.yawrate_sp))
         return self.yawrate_sp
 
+    def _track_prev(self, goal: Goal, x: float, y: float, z: float) -> tuple[float, float, float]:
+        """The start of the track to ``goal``: its previous waypoint, else, as FlightTaskAuto's
+        ``_evaluateTriplets`` does, where the vehicle was when the target (or the previous and next
+        waypoints' validity) last changed: a hold, a reposition or a return leg is a line too."""
+        if goal.prev[0] == goal.prev[0]:
+            self._track_key = None
+            return goal.prev
+        key = (goal.x, goal.y, goal.z, goal.next[0] == goal.next[0])
+        if key != self._track_key:
+            self._track_key = key
+            self.track_start = (x, y, z)
+        return self.track_start
+
     def _limit_tilt(self, ax: float, ay: float, tilt: float) -> tuple[float, float]:
         amax = GRAVITY * math.tan(tilt)
         a = math.hypot(ax, ay)
@@ -554,14 +580,15 @@ class Controller:
             speed = goal.speed if goal.speed == goal.speed else lim.cruise
             speed = min(speed, lim.vel_max)
             acc_rad = goal.acc_rad if goal.acc_rad == goal.acc_rad else lim.acc_rad
-            tx, ty, tz, via = track_target(goal, x, y, z, acc_rad)
+            prev = self._track_prev(goal, x, y, z)
+            tx, ty, tz, via = track_target(goal, x, y, z, acc_rad, prev)
             # PositionSmoothing's waypoints {trajectory, target, next}: an internal waypoint before
             # the target is passed towards the target; the target towards the triplet's next
             nxt = (goal.x, goal.y, goal.z) if via else goal.next
             final = corner_speed((self.px, self.py, self.pz), (tx, ty, tz), nxt, lim, acc_rad, speed)
             # the line the trajectory follows: from the previous waypoint, or from where the
             # vehicle is when it heads for an internal waypoint first (FlightTaskAuto's _prev_wp)
-            line = (x, y) if via else (goal.prev[:2] if goal.prev[0] == goal.prev[0] else None)
+            line = (x, y) if via else prev[:2]
             self._xy_reference(dt, tx, ty, speed, x, y, final=final, acc_rad=acc_rad, line=line, tz=tz)
             target_yaw = goal.yaw
             if math.isnan(target_yaw) and lim.yaw_mode == 0:
@@ -570,7 +597,7 @@ class Controller:
                 d = math.hypot(tx - x, ty - y)
                 if d >= acc_rad:
                     target_yaw = math.atan2(ty - y, tx - x)
-            az = self._z_loops(dt, z, vz, True)
+            az = self._z_loops(dt, z, vz, True, auto=True)
             ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         elif kind is GoalKind.TAKEOFF:
             self.ramp += dt
@@ -606,22 +633,26 @@ class Controller:
                 d = math.hypot(goal.x - x, goal.y - y)
                 if d > lim.acc_rad:
                     target_yaw = math.atan2(goal.y - y, goal.x - x)
-            az = self._z_loops(dt, z, vz, high, feedforward=self.ramp >= lim.tko_ramp)
+            az = self._z_loops(dt, z, vz, high, feedforward=self.ramp >= lim.tko_ramp, auto=True)
             ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         elif kind is GoalKind.LAND:
             self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad)
             # FlightTaskAuto's _dist_to_ground: the range finder's distance (SIH has one) when
             # the vehicle sets it, else the estimated altitude above home
             h = self.dist_bottom if self.dist_bottom == self.dist_bottom else -z
+            # FlightTaskAuto::_prepareLandSetpoints: MPC_LAND_SPEED below MPC_LAND_ALT2 rising to
+            # MPC_Z_VEL_MAX_DN at MPC_LAND_ALT1, MPC_LAND_CRWL within MPC_LAND_ALT3 of the ground
+            # by the range finder; PositionSmoothing's z axis then caps it at MPC_Z_V_AUTO_DN
             if h > lim.land_alt1:
-                v = lim.z_down
+                v = lim.z_vel_max_dn
             elif h > lim.land_alt2:
                 f = (h - lim.land_alt2) / max(lim.land_alt1 - lim.land_alt2, 1e-3)
-                v = lim.land_speed + (lim.z_down - lim.land_speed) * f
-            elif h > lim.land_alt3:
-                v = lim.land_speed
+                v = lim.land_speed + (lim.z_vel_max_dn - lim.land_speed) * f
             else:
-                v = min(lim.land_crawl, lim.land_speed)
+                v = lim.land_speed
+            if self.dist_bottom == self.dist_bottom and self.dist_bottom <= lim.land_alt3:
+                v = lim.land_crawl
+            v = min(v, lim.z_down)
             # PositionSmoothing's z axis (VelocitySmoothing): jerk-limited at MPC_JERK_AUTO up to
             # MPC_ACC_DOWN_MAX (PX4 SIH: the descent starts and slows to MPC_LAND_CRWL at +-4 m/s^3)
             dv = v - self.vz
@@ -635,7 +666,7 @@ class Controller:
             # descent from 10 m takes ~14 s, not the ~18 s of velocity control alone)
             self.pz += self.vz * dt
             target_yaw = goal.yaw
-            az = self._z_loops(dt, z, vz, True)
+            az = self._z_loops(dt, z, vz, True, auto=True)
             ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         elif kind is GoalKind.OFFBOARD:
             return self._offboard(dt, goal, x, y, z, vx, vy, vz, yaw)

@@ -242,15 +242,19 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: scenario for PositionSmoothing in three axes (the velocity setpoint straight at the 3-D target,
 #: z's own jerk-limited profile synchronized with x and y), the takeoff's PX4 constraints (its
 #: jerk-limited approach below MPC_LAND_ALT1, a waypoint's above) and PositionControl's vertical
-#: acceleration feed-forward (stop 23).
+#: acceleration feed-forward (stop 23); manual_and_rtl again for the track from where the vehicle
+#: was when a triplet without a previous waypoint arrived (its return leg), as FlightTaskAuto's
+#: _evaluateTriplets sets _triplet_prev_wp (stop 23); manual_and_rtl and params_and_commands for
+#: the auto modes' climb-rate limits (MulticopterPositionControl's setVelocityLimits) and the
+#: landing speed's PX4 parameters (MPC_Z_VEL_MAX_DN, MPC_Z_V_AUTO_DN's cap, MPC_LAND_CRWL) (stop 23).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
         "c6c96c45772664683306ec270172d0ca9c4ff5f2145582218ca41766799d8937",
         "6541fa83c5b91046b135b686b09a32272006b1a5ea7bd3a8d51a2e427671f217",
     ),
     "manual_and_rtl": (
-        "96fab48af7ec31b29a3e671d9bf30dbe6f5617d87bfd701d64b0e81aad1ea66b",
-        "fd1165ef18981d1d23ee9d9a4ab7d6f6baf504fcff13a29ca357e5cd1922120d",
+        "92130f9511744f8ef22e90233b49a2681284840bbc11c7e88273cee8bd7f9f80",
+        "35ef12836d7da20d01e07698317f07b741d9ce5ebb808ae0f01d2990a9debcc4",
     ),
     "datalink_loss": (
         "0abfc6dfae481f61e4f4ad6a7b5cc5285edbd8c0d70c30bb632d7384d71607bc",
@@ -261,8 +265,8 @@ GOLDEN: dict[str, tuple[str, str]] = {
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "9a6919a9311598d083ea9bd8a0bae1df13acaa60e51fd2f8d60570d80359ced9",
-        "da4d9758d357216c9067bdb48cd5e7d32328af27f15d4477c3f96d7c4b8b358c",
+        "1b85f451fec6b9647f3e7388b867436abfe602acec177d53bf489efa2df4f4cc",
+        "da6a86d24a3e9259bf0db70bf99857399beaf3b537ec24266512858a462c14f3",
     ),
 }
 

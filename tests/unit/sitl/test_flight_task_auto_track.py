@@ -217,3 +217,68 @@ def test_the_velocity_loop_damps_the_measured_acceleration_by_mpc_xy_vel_d_acc()
     # vel_dot the estimated velocity's derivative low-passed at MPC_VELD_LP (5 Hz): settled in 1 s
     assert _accelerating_command(0.0) - _accelerating_command(0.2) == pytest.approx(0.2 * 3.0, rel=0.02)
     assert _accelerating_command(0.0) - _accelerating_command(1.0) == pytest.approx(1.0 * 3.0, rel=0.02)
+
+
+def _no_previous_waypoint_flight() -> list[tuple[float, float]]:
+    """Flying east at 5 m/s, told to go 50 m north with no previous waypoint (a reposition, a
+    hold's new target): the reference's (x, y) every tick, the vehicle on it."""
+    c = Controller(Limits.of(ParamStore()))
+    c.reset(0.0, 0.0, -10.0, 5.0, 0.0, 0.0, 0.0)
+    goal = Goal(GoalKind.POSITION, x=0.0, y=50.0, z=-10.0)
+    out = []
+    for _ in range(int(30.0 / 0.02)):
+        c.update(0.02, goal, c.px, c.py, c.pz, c.vx, c.vy, c.vz, 0.0)
+        out.append((c.px, c.py))
+    return out
+
+
+def test_without_a_previous_waypoint_the_track_starts_where_the_vehicle_was() -> None:
+    """FlightTaskAuto::_evaluateTriplets: without a valid previous waypoint _triplet_prev_wp is the
+    vehicle's position when the target changed, so the track states apply to that line: carried
+    6 m past it, PX4 goes offtrack, comes back to the line and flies along it (a straight cut to
+    the target was 2.4 m off the line half-way)."""
+    path = _no_previous_waypoint_flight()
+    assert max(x for x, _ in path) > 5.0  # carried past the line by its speed
+    back = [abs(x) for x, y in path if 30.0 < y < 45.0]
+    assert back and max(back) < 0.6, max(back)
+    assert path[-1] == pytest.approx((0.0, 50.0), abs=0.05)
+
+
+def _landing_speed(height: float, **params: float) -> float:
+    """The landing reference's settled descent rate at ``height`` above the ground."""
+    store = ParamStore()
+    for name, value in params.items():
+        store.set(name, value)
+    c = Controller(Limits.of(store))
+    c.reset(0.0, 0.0, -height, 0.0, 0.0, 0.0, 0.0)
+    goal = Goal(GoalKind.LAND, x=0.0, y=0.0, z=0.0)
+    for _ in range(150):  # 3 s, the height held (only the reference's speed is looked at)
+        c.dist_bottom = height
+        c.update(0.02, goal, 0.0, 0.0, -height, 0.0, 0.0, c.vz, 0.0)
+    return c.vz
+
+
+def test_the_landing_speed_follows_px4s_parameters() -> None:
+    """FlightTaskAuto::_prepareLandSetpoints interpolates MPC_LAND_SPEED to MPC_Z_VEL_MAX_DN
+    between MPC_LAND_ALT2 and ALT1, PositionSmoothing caps it at MPC_Z_V_AUTO_DN, and within
+    MPC_LAND_ALT3 of the ground (range finder) it is MPC_LAND_CRWL whatever MPC_LAND_SPEED says."""
+    assert _landing_speed(7.5) == pytest.approx(1.1, abs=0.01)  # defaults: half-way 0.7 to 1.5
+    assert _landing_speed(7.5, MPC_Z_V_AUTO_DN=1.0) == pytest.approx(1.0, abs=0.01)
+    assert _landing_speed(3.0, MPC_LAND_SPEED=1.2, MPC_Z_V_AUTO_DN=1.0) == pytest.approx(1.0, abs=0.01)
+    assert _landing_speed(0.5, MPC_LAND_SPEED=0.2) == pytest.approx(0.3, abs=0.01)  # MPC_LAND_CRWL
+
+
+def test_an_auto_mode_limits_the_climb_rate_setpoint_as_px4_does() -> None:
+    """MulticopterPositionControl limits PositionControl's velocity setpoint with FlightTaskAuto's
+    constraints: down max(MPC_Z_VEL_MAX_DN, 1.2 MPC_Z_V_AUTO_DN) = 1.8 m/s, up MPC_Z_VEL_MAX_UP."""
+    c = Controller(Limits.of(ParamStore()))
+    c.reset(0.0, 0.0, -10.0, 0.0, 0.0, 0.0, 0.0)
+    goal = Goal(GoalKind.LAND, x=0.0, y=0.0, z=0.0)
+    for _ in range(100):  # the vehicle stays at 12 m while the reference descends from 10 m
+        c.dist_bottom = 12.0
+        c.update(0.02, goal, 0.0, 0.0, -12.0, 0.0, 0.0, 0.0, 0.0)
+    assert c.vsz == pytest.approx(1.8, abs=1e-6)
+    up = Goal(GoalKind.POSITION, x=0.0, y=0.0, z=-40.0)
+    for _ in range(300):  # the vehicle stays at 10 m, the reference climbs away at 3 m/s
+        c.update(0.02, up, 0.0, 0.0, -10.0, 0.0, 0.0, 0.0, 0.0)
+    assert c.vsz == pytest.approx(-3.0, abs=1e-6)
