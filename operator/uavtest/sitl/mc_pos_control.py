@@ -177,6 +177,33 @@ def max_speed_from_distance(jerk: float, accel: float, distance: float, final: f
     return max(0.5 * (-b + math.sqrt(b * b - 4.0 * c)), final)
 
 
+CLAMP_ACCURACY = 0.5  # m/s: PositionSmoothing's accuracy for clampToXYNorm / clampToZNorm
+
+
+def clamp_to_xy_norm(v: list[float], max_xy: float, accuracy: float) -> list[float]:
+    """``clampToXYNorm`` (TrajectoryConstraints.hpp): a 3-D vector whose horizontal part is longer
+    than ``max_xy`` scaled down as a whole; only its horizontal part when both are under
+    ``accuracy`` (so a vanishing limit does not stop the other axis)."""
+    xy = math.hypot(v[0], v[1])
+    if xy <= 1e-9 or max_xy >= xy:
+        return v
+    f = max_xy / xy
+    if max_xy < accuracy and xy < accuracy:
+        return [v[0] * f, v[1] * f, v[2]]
+    return [c * f for c in v]
+
+
+def clamp_to_z_norm(v: list[float], max_z: float, accuracy: float) -> list[float]:
+    """``clampToZNorm``: the same for the vertical part against ``max_z``."""
+    z = abs(v[2])
+    if z <= 1e-9 or max_z >= z:
+        return v
+    f = max_z / z
+    if max_z < accuracy and z < accuracy:
+        return [v[0], v[1], v[2] * f]
+    return [c * f for c in v]
+
+
 def track_target(
     goal: Goal, x: float, y: float, z: float, acc_rad: float, prev: tuple[float, float, float] | None = None
 ) -> tuple[float, float, float, bool]:
@@ -400,20 +427,7 @@ class Controller:
             vd = [ex * k, ey * k, ez * k]
         else:
             vd = [0.0, 0.0, 0.0]
-        xy = math.hypot(vd[0], vd[1])
-        if xy > 1e-9 and xy_speed < xy:
-            f = xy_speed / xy
-            if xy_speed < 0.5 and xy < 0.5:
-                vd[0], vd[1] = vd[0] * f, vd[1] * f
-            else:
-                vd = [c * f for c in vd]
-        vz_abs = abs(vd[2])
-        if vz_abs > 1e-9 and z_speed < vz_abs:
-            f = z_speed / vz_abs
-            if z_speed < 0.5 and vz_abs < 0.5:
-                vd[2] *= f
-            else:
-                vd = [c * f for c in vd]
+        vd = clamp_to_z_norm(clamp_to_xy_norm(vd, xy_speed, CLAMP_ACCURACY), z_speed, CLAMP_ACCURACY)
         self.vz_plan = vd[2]
         fx = velocity_smoothing.plan(self.ax, self.vx, self.px, vd[0], lim.jerk, lim.acc_hor, lim.vel_max)
         fy = velocity_smoothing.plan(self.ay, self.vy, self.py, vd[1], lim.jerk, lim.acc_hor, lim.vel_max)

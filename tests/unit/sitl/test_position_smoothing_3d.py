@@ -12,7 +12,7 @@ import math
 import pytest
 
 from uavtest.sitl import velocity_smoothing
-from uavtest.sitl.mc_pos_control import Controller, Goal, GoalKind, Limits
+from uavtest.sitl.mc_pos_control import Controller, Goal, GoalKind, Limits, clamp_to_xy_norm, clamp_to_z_norm
 from uavtest.sitl.params import ParamStore
 
 DT = 0.02
@@ -93,3 +93,14 @@ def test_the_three_axes_profiles_end_together() -> None:
     assert fy.total == pytest.approx(fx.total) and fz.total == pytest.approx(fx.total)
     for p, v in ((fx, 5.0), (fy, 1.0), (fz, -1.0)):
         assert velocity_smoothing.advance(p, p.total)[1] == pytest.approx(v, abs=1e-6)
+
+
+def test_the_clamps_scale_the_whole_vector_unless_both_are_under_the_accuracy() -> None:
+    # TrajectoryConstraints.hpp: a horizontal part of 5 against a limit of 2.5 halves all three
+    assert clamp_to_xy_norm([3.0, 4.0, 1.0], 2.5, 0.5) == pytest.approx([1.5, 2.0, 0.5])
+    assert clamp_to_z_norm([3.0, 4.0, -2.0], 1.0, 0.5) == pytest.approx([1.5, 2.0, -1.0])
+    # within the limit: unchanged
+    assert clamp_to_xy_norm([3.0, 4.0, 1.0], 5.0, 0.5) == [3.0, 4.0, 1.0]
+    # both under the accuracy: only that axis (a nearly reached altitude leaves x and y alone)
+    assert clamp_to_z_norm([3.0, 4.0, -0.4], 0.1, 0.5) == pytest.approx([3.0, 4.0, -0.1])
+    assert clamp_to_xy_norm([0.3, 0.0, 2.0], 0.1, 0.5) == pytest.approx([0.1, 0.0, 2.0])
