@@ -246,7 +246,9 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: was when a triplet without a previous waypoint arrived (its return leg), as FlightTaskAuto's
 #: _evaluateTriplets sets _triplet_prev_wp (stop 23); manual_and_rtl and params_and_commands for
 #: the auto modes' climb-rate limits (MulticopterPositionControl's setVelocityLimits) and the
-#: landing speed's PX4 parameters (MPC_Z_VEL_MAX_DN, MPC_Z_V_AUTO_DN's cap, MPC_LAND_CRWL) (stop 23).
+#: landing speed's PX4 parameters (MPC_Z_VEL_MAX_DN, MPC_Z_V_AUTO_DN's cap, MPC_LAND_CRWL) (stop 23);
+#: params_and_commands again for MIS_TAKEOFF_ALT as Takeoff's default, not a minimum, and the
+#: cruise speed reset on every navigator mode's activation, as PX4 v1.15's navigator does (stop 23).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
         "c6c96c45772664683306ec270172d0ca9c4ff5f2145582218ca41766799d8937",
@@ -265,8 +267,8 @@ GOLDEN: dict[str, tuple[str, str]] = {
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "1b85f451fec6b9647f3e7388b867436abfe602acec177d53bf489efa2df4f4cc",
-        "da6a86d24a3e9259bf0db70bf99857399beaf3b537ec24266512858a462c14f3",
+        "4b5e47f540117a3682b9e95013a5eb470defa82700d70ee1854e7b2992558cbd",
+        "c38fa5f18b8e3ebeb9f1177f0edd00cb4cd5372b3a2111b4c0d11e8c61259c50",
     ),
 }
 

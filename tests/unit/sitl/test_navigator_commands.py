@@ -7,6 +7,8 @@ from __future__ import annotations
 import itertools
 import math
 
+import pytest
+
 from uavtest.px4.modes import NavState
 from uavtest.sitl.commander.vehicle_command import RESULT_CANCELLED
 from uavtest.sitl.mav import MavCmd, MavFrame, MavResult, Msg
@@ -265,3 +267,22 @@ def test_condition_yaw_is_unsupported_as_in_px4():
     assert command(v, MavCmd.CONDITION_YAW, 90, 20, 1, 0) == MavResult.UNSUPPORTED
     assert any("CONDITION_YAW" in t for t in texts(v, 3_000_000))
     assert abs(math.remainder(v.st.yaw - yaw, 2 * math.pi)) < 0.1
+
+
+def test_takeoff_to_below_mis_takeoff_alt_climbs_only_there():
+    """PX4 v1.15's Takeoff uses MIS_TAKEOFF_ALT (2.5 m) only when the command has no altitude: a
+    takeoff to 1.5 m hovers at 1.5 m (the built-in vehicle used it as a minimum)."""
+    v = hovering(alt=1.5)
+    assert -v.body.z == pytest.approx(1.5, abs=0.4)
+
+
+def test_a_new_mode_resets_the_cruise_speed_as_px4s_navigator_does():
+    """reset_cruising_speed() on Loiter, Land, Takeoff, RtlDirect and Mission activation: a speed
+    set by DO_CHANGE_SPEED in hold is not carried into Return."""
+    v = hovering()
+    assert command(v, MavCmd.DO_CHANGE_SPEED, 1, 1.5, -1) == MavResult.ACCEPTED
+    assert v.nav.speed == 1.5
+    assert command(v, MavCmd.NAV_RETURN_TO_LAUNCH) == MavResult.ACCEPTED
+    v.advance(v.time_us + 200_000)
+    assert v.nav_state == NavState.AUTO_RTL
+    assert math.isnan(v.nav.speed)

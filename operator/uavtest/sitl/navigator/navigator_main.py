@@ -3,7 +3,8 @@
 Pure logic: fed the estimated state and the clock, it returns the controller's ``Goal`` and
 queues events (mission item reached, mission finished, status texts). PX4 behaviour kept:
 
-- takeoff to ``max(item altitude, MIS_TAKEOFF_ALT)``, done within ``NAV_MC_ALT_RAD``;
+- takeoff to the item's altitude (``MIS_TAKEOFF_ALT`` is Takeoff mode's default, not a minimum, in
+  PX4 v1.15), done within ``NAV_MC_ALT_RAD``;
 - a waypoint is reached within its acceptance radius (``NAV_ACC_RAD`` unless the item sets one)
   and ``NAV_MC_ALT_RAD``; an item with a heading (param4, degrees) then waits until the heading
   error is below ``MIS_YAW_ERR`` (or ``MIS_YAW_TMT`` passes) before it counts as reached, one
@@ -262,9 +263,18 @@ class Navigator:
         """Start flying a mode from the current state (a hold keeps ``hold_z`` when given)."""
         self.nav_state = nav_state
         self._step = _Step(since=now, x=st.x, y=st.y, z=st.z if hold_z is None else hold_z, yaw=st.yaw)
+        # every navigator mode resets the cruise speed on activation (reset_cruising_speed in
+        # Loiter, Land, Takeoff, RtlDirect and MissionBase::on_activation)
+        self.speed = math.nan
         if nav_state == NavState.AUTO_TAKEOFF:
+            # Takeoff::set_takeoff_position: the command's altitude, else MIS_TAKEOFF_ALT (a
+            # default, not a minimum); never below where the vehicle already is
             alt = target_alt if target_alt is not None else self.params["MIS_TAKEOFF_ALT"]
-            self._step.z = -max(alt, self.params["MIS_TAKEOFF_ALT"])
+            if -alt > st.z:
+                alt = -st.z
+                text = (MavSeverity.CRITICAL, "Already higher than takeoff altitude")
+                self.events.append(Event(EventKind.TEXT, text))
+            self._step.z = -alt
         elif nav_state == NavState.AUTO_RTL:
             self._step.rtl = self._rtl_start(st, now)
         elif nav_state == NavState.AUTO_MISSION and self.finished:
@@ -364,8 +374,8 @@ class Navigator:
         if s.phase == Phase.START:
             s.since = now
             if cmd == MavCmd.DO_CHANGE_SPEED:
-                if item.param2 > 0:
-                    self.speed = item.param2
+                # issued as a vehicle command: param2 > 0 sets the cruise speed, else resets it
+                self.speed = item.param2 if item.param2 > 0 else math.nan
                 self._advance(st, now)
                 return self._mission(st, now)
             if cmd == MavCmd.NAV_RETURN_TO_LAUNCH:
@@ -387,7 +397,6 @@ class Navigator:
                 s.x, s.y, s.z = self._local(item, st)
                 if cmd == MavCmd.NAV_TAKEOFF:
                     s.x, s.y = st.x, st.y
-                    s.z = -max(-s.z, p["MIS_TAKEOFF_ALT"])
                     s.phase = Phase.TAKEOFF
                     # the item's heading (param4); NaN: FlightTaskAuto's MPC_YAW_MODE decides
                     s.yaw = math.radians(item.param4) if math.isfinite(item.param4) else math.nan
@@ -409,7 +418,7 @@ class Navigator:
                     s.phase = Phase.FLY
         if s.phase == Phase.TAKEOFF:
             if "after_takeoff" in s.extra:  # implicit takeoff before the first waypoint
-                target_z = -max(-s.z, p["MIS_TAKEOFF_ALT"])
+                target_z = s.z  # the first position item's altitude (MissionBase's climb)
                 if st.landed or abs(st.z - target_z) > p["NAV_MC_ALT_RAD"]:
                     return self._goal_set(GoalKind.TAKEOFF, s.extra["tx"], s.extra["ty"], target_z, s.yaw)
                 s.phase = Phase.FLY
