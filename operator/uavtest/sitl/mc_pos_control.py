@@ -515,13 +515,12 @@ class Controller:
         the trajectory's acceleration fed forward (not during the takeoff ramp, as
         MulticopterPositionControl drops it there). In the auto modes (``auto``) the climb-rate
         setpoint is limited as MulticopterPositionControl's setVelocityLimits does with
-        FlightTaskAuto's constraints: up to min(1.2 MPC_Z_V_AUTO_UP, MPC_Z_VEL_MAX_UP), down to
-        max(MPC_Z_VEL_MAX_DN, 1.2 MPC_Z_V_AUTO_DN)."""
+        FlightTaskAuto's constraints: up to MPC_Z_VEL_MAX_UP (FlightTaskAuto's 1.2
+        MPC_Z_V_AUTO_UP, clamped there), down to max(MPC_Z_VEL_MAX_DN, 1.2 MPC_Z_V_AUTO_DN)."""
         lim = self.lim
         vzc = self.vz + (lim.z_p * (self.pz - z) if position else 0.0)
         if auto:
-            up = min(max(lim.z_vel_max_up, 1.2 * lim.z_up), lim.z_vel_max_up)
-            vzc = max(-up, min(max(lim.z_vel_max_dn, 1.2 * lim.z_down), vzc))
+            vzc = max(-lim.z_vel_max_up, min(max(lim.z_vel_max_dn, 1.2 * lim.z_down), vzc))
         self.vsz = vzc
         e = vzc - vz
         # PX4 SIH climbs at ~90 % of the setpoint for seconds: a slow thrust integrator
@@ -634,7 +633,6 @@ class Controller:
                 self.vz_plan = vd
                 fz = velocity_smoothing.plan(self.az_ref, self.vz, self.pz, vd, lim.jerk, acc, climb)
                 self.az_ref, self.vz, _ = velocity_smoothing.advance(fz, dt)
-                self.pz = z
                 # mc_pos_control's takeoff ramp: the climb-rate setpoint starts below hover
                 # (+0.7 m/s down) and its limit rises at MPC_TKO_SPEED / MPC_TKO_RAMP_T
                 ramped = TKO_RAMP_START - climb / max(lim.tko_ramp, 1e-3) * self.ramp
