@@ -61,7 +61,8 @@ from uavtest.analysis.fidelity import (
     velocity_errors,
     vertical_estimate_errors,
 )
-from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
+from uavtest.analysis.ulog import read_ulog, setpoint_changes, trajectory_from_ulog
+from uavtest.analysis.waypoint_passes import WaypointPass, first_passes
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.mav import MavCmd, MavFrame
@@ -144,6 +145,8 @@ class Flights:
     #: per flight and axis: (log time, velocity error) in the air, for ``boot_time_correlation``
     boot_x: list = dataclasses.field(default_factory=list)
     boot_y: list = dataclasses.field(default_factory=list)
+    #: every leg's first pass at its waypoint, every flight's together (``first_passes``)
+    passes: list[WaypointPass] = dataclasses.field(default_factory=list)
 
     def joined(self, other: Flights) -> Flights:
         """These flights and ``other``'s, every measurement together."""
@@ -166,6 +169,7 @@ def _measure(ulog: ULog, into: Flights) -> None:
         into.boot_x.append((g, ex))
         into.boot_y.append((g, ey))
     into.arrival_errors += arrival_velocity_errors(*window)
+    into.passes += first_passes(t, lp["x"], lp["y"], setpoint_changes(ulog))
     att = ulog.get_dataset("vehicle_attitude").data
     vertical = displacement_errors(t[air], lp["z"][air], lp["vz"][air])
     if len(vertical):
@@ -201,6 +205,17 @@ def _measure(ulog: ULog, into: Flights) -> None:
             (traj.t[0], traj.t[-1]),
         )
     )
+
+
+def _passes(passes: list[WaypointPass]) -> str:
+    """Closest first pass (mean, min–max), how many missed the acceptance radius, and the
+    median / longest time from the pass to acceptance."""
+    closest = [p.closest for p in passes]
+    waits = [p.accepted_after for p in passes if np.isfinite(p.accepted_after)]
+    missed = sum(p.missed for p in passes)
+    wait = f"; accepted after {statistics.median(waits):.1f} s (≤ {max(waits):.1f})" if waits else ""
+    spread_ = f"{np.mean(closest):.2f} ({min(closest):.2f}–{max(closest):.2f})"
+    return f"{spread_}; {missed}/{len(passes)} missed{wait}"
 
 
 def px4_flights(names: list[str], extra: Sequence[Path] = ()) -> Flights:
@@ -287,6 +302,14 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "EKF2 velocity error on arrival, m/s",
             f"{statistics.median(a_px4):.2f} ({min(a_px4):.2f}–{max(a_px4):.2f})",
             f"{statistics.median(a_ours):.2f} ({min(a_ours):.2f}–{max(a_ours):.2f})",
+            "",
+            "",
+        )
+    if px4_all.passes and ours_all.passes:
+        t.add_row(
+            "first pass at a waypoint: closest, m; missed the acceptance radius; s to acceptance",
+            _passes(px4_all.passes),
+            _passes(ours_all.passes),
             "",
             "",
         )

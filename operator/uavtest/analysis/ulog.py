@@ -28,6 +28,7 @@ from pyulog import ULog
 from uavtest.analysis.models import MissionProgress
 from uavtest.analysis.trajectory import Trajectory
 from uavtest.errors import BadInput, MissingFile
+from uavtest.spec.geo import geodetic_to_ned
 
 __all__ = [
     "CLIMB_THRESHOLD",
@@ -38,6 +39,7 @@ __all__ = [
     "mission_progress_from_ulog",
     "motion_window",
     "read_ulog",
+    "setpoint_changes",
     "topic",
     "trajectory_from_ulog",
 ]
@@ -297,3 +299,26 @@ def crash_reported(ulog: ULog) -> str | None:
         if m.message.lower().startswith("crash"):
             return f"{m.message} (t={m.timestamp / 1e6:.1f} s)"
     return None
+
+
+def setpoint_changes(ulog: ULog) -> np.ndarray:
+    """``(time s, north m, east m, acceptance radius m)`` rows, one per change of the setpoint
+    triplet's current setpoint (its position or its type), in ``vehicle_local_position``'s frame
+    (its reference ``ref_lat`` / ``ref_lon``: PX4's EKF origin); empty (0, 4) without either
+    topic or a reference."""
+    sp = topic(ulog, "position_setpoint_triplet")
+    lp = topic(ulog, "vehicle_local_position")
+    empty = np.empty((0, 4))
+    if sp is None or lp is None or "ref_lat" not in lp or "current.acceptance_radius" not in sp:
+        return empty
+    lat, lon, kind = sp["current.lat"], sp["current.lon"], sp["current.type"]
+    valid = np.isfinite(lat) & np.isfinite(lon)
+    if not valid.any():
+        return empty
+    key = np.column_stack([np.round(lat * 1e7), np.round(lon * 1e7), kind])[valid]
+    changed = np.concatenate(([True], np.any(key[1:] != key[:-1], axis=1)))
+    rows = np.flatnonzero(valid)[changed]
+    north, east = geodetic_to_ned(lat[rows], lon[rows], float(lp["ref_lat"][-1]), float(lp["ref_lon"][-1]))
+    return np.column_stack(
+        [sp["timestamp"][rows] / 1e6, north, east, sp["current.acceptance_radius"][rows]]
+    ).astype(float)
