@@ -69,6 +69,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "MIS_TAKEOFF_ALT": (FLOAT, 2.5),
     "MIS_YAW_ERR": (FLOAT, 12.0),
     "MIS_YAW_TMT": (FLOAT, -1.0),
+    "NAV_LOITER_RAD": (FLOAT, 80.0),  # Loiter::set_loiter_position's "already on the loiter"
     "RTL_RETURN_ALT": (FLOAT, 30.0),
     "RTL_DESCEND_ALT": (FLOAT, 10.0),
     "RTL_LAND_DELAY": (FLOAT, 0.0),
@@ -153,7 +154,6 @@ UNMODELLED_AT_BOOT: tuple[str, ...] = (
     "COM_ARM_WO_GPS",
     "COM_HOME_EN",
     "COM_FLTMODE1",
-    "NAV_LOITER_RAD",
     "NAV_TRAFF_AVOID",
     "MIS_DIST_1WP",
     "MPC_ACC_HOR_MAX",

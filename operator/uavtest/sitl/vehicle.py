@@ -478,6 +478,7 @@ class Vehicle:
         b, e, st = self.body, self.est, self.st
         st.x, st.y, st.z = b.x + e.ex, b.y + e.ey, b.z + e.ez
         st.yaw = b.yaw + e.eh
+        st.vx, st.vy = b.vx + e.evx, b.vy + e.evy
         st.landed = self.land.landed
 
     # ------------------------------------------------------------------ 50 Hz
@@ -525,7 +526,7 @@ class Vehicle:
         goal = self._goal_for(t)
         self.goal = goal
         if self._tick % (CONTROL_EVERY * 10) == 0:  # 5 Hz: GEOFENCE_CHECK_INTERVAL_US
-            result = self.nav.geofence_breach_check(self.st, t)
+            result = self.nav.geofence_breach_check(self.st, t, self.commander.armed)
             if result is not None:
                 self.recorder.data(result)
         b, e, st = self.body, self.est, self.st
@@ -741,7 +742,7 @@ class Vehicle:
             elif ev.kind is EventKind.CURRENT:
                 self._out.append(STREAMS["MISSION_CURRENT"](self, t))
                 changed = True
-            elif ev.kind is EventKind.FINISHED:
+            elif ev.kind is EventKind.FINISHED or ev.kind is EventKind.FAILURE:
                 changed = True
             elif ev.kind is EventKind.TEXT:
                 severity, text = ev.value  # type: ignore[misc]
@@ -763,7 +764,7 @@ class Vehicle:
         self.recorder.data(
             topics.MissionResult(
                 self.time_us, 0, 0, self.commander.home_count, nav.reached, min(nav.current, 65535), total,
-                nav.mission_valid, False, nav.finished, False, 0, 0, 0, 0,
+                nav.mission_valid, False, nav.finished, nav.failure, 0, 0, 0, 0,
             )
         )  # fmt: skip
 

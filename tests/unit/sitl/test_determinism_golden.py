@@ -248,27 +248,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: the auto modes' climb-rate limits (MulticopterPositionControl's setVelocityLimits) and the
 #: landing speed's PX4 parameters (MPC_Z_VEL_MAX_DN, MPC_Z_V_AUTO_DN's cap, MPC_LAND_CRWL) (stop 23);
 #: params_and_commands again for MIS_TAKEOFF_ALT as Takeoff's default, not a minimum, and the
-#: cruise speed reset on every navigator mode's activation, as PX4 v1.15's navigator does (stop 23).
+#: cruise speed reset on every navigator mode's activation, as PX4 v1.15's navigator does (stop 23);
+#: every log for NAV_LOITER_RAD, now modelled, moved among the parameters (their order; the
+#: flights' telemetry is unchanged), params_and_commands' telemetry too (PARAM_VALUE indices).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "c6c96c45772664683306ec270172d0ca9c4ff5f2145582218ca41766799d8937",
+        "7aba28f318060644fbfaa8f6ee447ebc90ca8007fab67b61c71f1cae44da1121",
         "6541fa83c5b91046b135b686b09a32272006b1a5ea7bd3a8d51a2e427671f217",
     ),
     "manual_and_rtl": (
-        "92130f9511744f8ef22e90233b49a2681284840bbc11c7e88273cee8bd7f9f80",
+        "9d1c50464ee6957a97fc52918b0ec3e16b9330ce26255b82198a17b88bfc3435",
         "35ef12836d7da20d01e07698317f07b741d9ce5ebb808ae0f01d2990a9debcc4",
     ),
     "datalink_loss": (
-        "0abfc6dfae481f61e4f4ad6a7b5cc5285edbd8c0d70c30bb632d7384d71607bc",
+        "4ac4e1e8eb4fa436c564d6ea055d640297472204675575099f473384cc7d6f9d",
         "b864d0b94d63c2fab5ad69d384b605318fc4e16f14777ab972a9a97537fb6bdc",
     ),
     "crash": (
-        "d1dd9881d342faa95513677ef1fd9039b9090b3d392ebe3e2d01397e1b862bc9",
+        "5ae9edf2fd218727c0b42f2448cbfb65b78714fb8ba294d63577227f58a349e3",
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "4b5e47f540117a3682b9e95013a5eb470defa82700d70ee1854e7b2992558cbd",
-        "c38fa5f18b8e3ebeb9f1177f0edd00cb4cd5372b3a2111b4c0d11e8c61259c50",
+        "fa2639ea0de67c47f4fe21a8759f44a53c62bd96cd49f0717d49926136899210",
+        "2b55f5f751cb2b87f125031cd178108716abfa5f115522e85301e5740965cd84",
     ),
 }
 

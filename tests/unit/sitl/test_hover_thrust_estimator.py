@@ -56,7 +56,10 @@ def test_it_waits_for_the_air_and_stops_when_landed():
 
 def _first_leg(shared_data, seed: int, use_hte: int) -> tuple[np.ndarray, float]:
     config, items = competition(shared_data, 1, seed)
-    config = dataclasses.replace(config, params={**config.params, "MPC_USE_HTE": use_hte})
+    # PX4 SIH's flights start on the takeoff item (mission1's planned home is 0.45 m off it, and
+    # PX4 v1.15 flies to the takeoff item's position after the climb, Mission::handleTakeoff)
+    home = config.home.model_copy(update={"lat": items[0].lat, "lon": items[0].lon})
+    config = dataclasses.replace(config, home=home, params={**config.params, "MPC_USE_HTE": use_hte})
     sink = MemorySink()
     fly_mission(config, items, sink=sink)
     log = ULog(io.BytesIO(sink.logs[0]))
@@ -81,5 +84,7 @@ def test_a_competition_flight_logs_px4s_estimate_and_gathers_speed_as_px4_does(s
         assert 0.45 < hover[-1] < 0.50
         with_hte.append(v15)
         without.append(_first_leg(shared_data, seed, 0)[1])
-    assert np.mean(with_hte) < np.mean(without) - 0.05
-    assert np.mean(with_hte) == pytest.approx(3.95, abs=0.2)
+    # slower with the estimate in every flight; the median, as one flight in four may slow down
+    # mid-leg (seed 2 here: to 1.0 m/s at 15 m with the estimate, 1.6 without)
+    assert all(w < wo for w, wo in zip(with_hte, without, strict=True)), (with_hte, without)
+    assert np.median(with_hte) == pytest.approx(3.95, abs=0.2)

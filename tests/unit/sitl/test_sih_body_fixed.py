@@ -44,8 +44,10 @@ def _first_turn(ulog: ULog) -> tuple[float, float, float]:
     valid = np.isfinite(sp["yaw"])
     setpoint = np.degrees(np.interp(grid, sp["timestamp"][valid] / 1e6, np.unwrap(sp["yaw"][valid])))
     rate = np.convolve(np.gradient(heading, grid), np.ones(5) / 5, mode="same")
-    final = setpoint[-1]
-    direction = np.sign(final - heading[0])
+    direction = np.sign(setpoint[-1] - heading[0])
+    # the setpoint the sweep ends on: its extreme (a vehicle off the track from the takeoff item,
+    # PX4's previous waypoint, may turn its setpoint back towards the track before the 4 s end)
+    final = float((setpoint * direction).max() * direction)
     return (
         float(np.abs(np.gradient(setpoint, grid)).max()),
         float(np.abs(rate).max()),

@@ -5,13 +5,23 @@ queues events (mission item reached, mission finished, status texts). PX4 behavi
 
 - takeoff to the item's altitude (``MIS_TAKEOFF_ALT`` is Takeoff mode's default, not a minimum, in
   PX4 v1.15), done within ``NAV_MC_ALT_RAD``;
+- a mission climbs first where the vehicle is when its first position item is above it
+  (``checkClimbRequired`` on activation, ``Mission::handleTakeoff``: a TAKEOFF setpoint from the
+  ground, "Climb to N meters above home"); a TAKEOFF item is then flown to as a waypoint (its
+  lat/lon, its yaw ignored) and reached there;
 - a waypoint is reached within its acceptance radius (``NAV_ACC_RAD`` unless the item sets one)
-  and ``NAV_MC_ALT_RAD``; an item with a heading (param4, degrees) then waits until the heading
-  error is below ``MIS_YAW_ERR`` (or ``MIS_YAW_TMT`` passes) before it counts as reached, one
-  without (NaN, as QGC and the runner send) is reached at once (PX4 v1.15's
-  ``get_yaw_to_be_accepted``); then it holds ``param1`` seconds;
+  and ``NAV_MC_ALT_RAD`` (``_time_wp_reached``); an item with a heading (param4, degrees) is flown
+  to facing it and waits until the heading error is below ``MIS_YAW_ERR``: ``MIS_YAW_TMT`` set
+  accepts an unforced heading at once, and fails the mission ("unable to reach heading within
+  timeout") when a forced one (LOITER_TIME param2) is not reached within it; one without (NaN, as
+  QGC and the runner send) is reached at once (``get_yaw_to_be_accepted``); the hold, ``param1``
+  seconds, counts from the arrival;
+- Hold while flying holds where the vehicle can stop (``calculate_breaking_stop``: MPC_ACC_HOR,
+  MPC_JERK_AUTO), or on the loiter setpoint it is already on (``Loiter::set_loiter_position``);
+  a geofence breach with GF_ACTION 2 holds where the breach was seen (its reposition);
 - a waypoint is flown along the track from the previous one (``Goal.prev``, PX4's
   position_setpoint_triplet.previous): the controller's FlightTaskAuto states (offtrack, ...);
+  a loiter item (LOITER_TIME, LOITER_UNLIM) is braked onto, never turned through;
 - a land item first flies to its position at the current altitude (reached then, as PX4
   reports it), then descends; the mission is finished once landed;
 - DO_CHANGE_SPEED sets the cruise speed; camera items are skipped;
@@ -46,10 +56,17 @@ from uavtest.sitl.navigator.geofence import NAV_RALLY_POINT, Geofence, rally_des
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.uorb import GeofenceResult
 
-__all__ = ["Event", "EventKind", "Navigator", "State"]
+__all__ = ["Event", "EventKind", "Navigator", "State", "braking_distance"]
 
-#: items whose successor becomes the triplet's next unless they hold (param1) or stop
-_PASS_THROUGH = frozenset({MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_TIME})
+#: items whose successor becomes the triplet's next unless they hold (param1) or stop. Not the
+#: loiter items: their setpoint is SETPOINT_TYPE_LOITER and FlightTaskAuto::_evaluateTriplets
+#: makes a loiter's next its own target, so the vehicle stops there even with no hold time
+_PASS_THROUGH = frozenset({MavCmd.NAV_WAYPOINT, MavCmd.NAV_TAKEOFF})
+#: items with a heading (param4) that the vehicle turns to and, on arrival, waits for
+_HEADING_ITEMS = frozenset({MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_TIME, MavCmd.NAV_LOITER_UNLIM})
+#: items whose setpoint is SETPOINT_TYPE_LOITER (MissionBlock::mission_item_to_position_setpoint)
+_LOITER_ITEMS = frozenset({MavCmd.NAV_LOITER_TIME, MavCmd.NAV_LOITER_UNLIM})
+FLT_EPSILON = 1.1920929e-07
 
 
 class EventKind(Enum):
@@ -59,6 +76,7 @@ class EventKind(Enum):
     TEXT = "text"  # value: (severity, text)
     HOLD = "hold"  # the navigator asks the commander to switch to hold (after takeoff)
     RTL = "rtl"  # a mission RTL item: vehicle_command NAV_RETURN_TO_LAUNCH (commander → Return)
+    FAILURE = "failure"  # mission_result.failure set (Navigator::set_mission_failure_heading_timeout)
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,6 +94,8 @@ class State:
     z: float = 0.0
     yaw: float = 0.0
     landed: bool = True
+    vx: float = 0.0  # the estimated horizontal velocity (Navigator::calculate_breaking_stop)
+    vy: float = 0.0
 
 
 class Phase(Enum):
@@ -111,7 +131,19 @@ class _Step:
     rtl: _Rtl | None = None
     #: position_setpoint_triplet.next for the item, looked up once (None: not yet)
     next: tuple[float, float, float] | None = None
+    #: MissionBlock's _time_wp_reached: when the item's position was reached (its hold counts
+    #: from then, the heading's wait too)
+    reached_at: float = math.nan
+    #: mission_item.force_heading (a LOITER_TIME's param2 > 0): the heading must be reached
+    force_heading: bool = False
     extra: dict[str, float] = field(default_factory=dict)
+
+
+def braking_distance(velocity: float, jerk: float, accel: float) -> float:
+    """math::trajectory::computeBrakingDistanceFromVelocity as Navigator::calculate_breaking_stop
+    calls it (MPC_JERK_AUTO, MPC_ACC_HOR, a delay acceleration of 0.6 MPC_JERK_AUTO): the distance
+    to brake from ``velocity``, v (v / 2a + 0.6)."""
+    return velocity * (velocity / (2.0 * accel) + 0.6 * jerk / jerk)
 
 
 class Navigator:
@@ -135,6 +167,13 @@ class Navigator:
         self.geofence = Geofence(projection)
         self.rally: list[tuple[float, float]] = []  # rally points, local x, y
         self.mission_feasible = True  # the mission passes the geofence
+        self.failure = False  # mission_result.failure: a forced heading not reached in MIS_YAW_TMT
+        #: MissionBase::_mission_init_climb_altitude_amsl as a local z: the climb owed before the
+        #: first position item (checkClimbRequired on activation), None when none is
+        self._climb_z: float | None = None
+        #: the geofence's reposition triplet (x, y, z, time) for Hold, and _geofence_reposition_sent
+        self._gf_reposition: tuple[float, float, float, float] | None = None
+        self._gf_reposition_sent = False
         # PX4's ObstacleAvoidance publishes yaw_acceptance NaN: with avoidance on, a waypoint is
         # accepted from any heading (Navigator::get_yaw_to_be_accepted), no MIS_YAW_ERR wait
         self.yaw_acceptance = True
@@ -173,7 +212,9 @@ class Navigator:
         self.rally = [self.proj.project(it.lat, it.lon) for it in items if it.command == NAV_RALLY_POINT]
 
     def check_mission_feasible(self) -> None:
-        """MissionFeasibilityChecker::checkMissionAgainstGeofence: every waypoint inside the fence."""
+        """MissionFeasibilityChecker::checkMissionAgainstGeofence: every waypoint inside the fence.
+        A check also clears mission_result.failure (MissionBase::check_mission_valid)."""
+        self.failure = False
         p = self.params
         gf = self.geofence
         max_hor, max_ver = p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"]
@@ -202,7 +243,7 @@ class Navigator:
         hx, hy, _ = self.home
         return self.geofence.allows(x, y, alt, (hx, hy, 0.0), p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"])
 
-    def geofence_breach_check(self, st: State, t_us: int) -> GeofenceResult | None:
+    def geofence_breach_check(self, st: State, t_us: int, armed: bool = True) -> GeofenceResult | None:
         """Navigator::geofence_breach_check (every 0.2 s): the result, or None when GF_ACTION is 0
         (PX4 does not check then) or nothing is fenced (no limit, no area: nothing to log)."""
         p = self.params
@@ -214,6 +255,14 @@ class Navigator:
             return None
         hx, hy, hz = self.home
         gf.check(st.x, st.y, -st.z, (hx, hy, -hz), max_hor, max_ver)
+        if gf.max_dist or gf.max_alt or gf.custom:
+            # GF_ACTION 2 (Hold): a reposition to where the vehicle is (GF_PREDICT 0), once per
+            # breach, that Loiter flies instead of its braking stop
+            if not self._gf_reposition_sent and armed and action == 2:
+                self._gf_reposition = (st.x, st.y, st.z, t_us / 1e6)
+                self._gf_reposition_sent = True
+        else:
+            self._gf_reposition_sent = False
         return GeofenceResult(t_us, gf.max_dist, gf.max_alt, gf.custom, action)
 
     def set_current(self, seq: int, now: float = 0.0) -> bool:
@@ -244,7 +293,9 @@ class Navigator:
         s = self._step
         if x is None or y is None:
             if z is None and math.isnan(yaw):
-                s.x, s.y = st.x, st.y
+                # all NaN pauses the vehicle where it can stop (navigator_main.cpp: not from a
+                # takeoff setpoint, there the current position)
+                s.x, s.y = (st.x, st.y) if self._goal.kind is GoalKind.TAKEOFF else self.breaking_stop(st)
         else:
             s.x, s.y = x, y
         s.z = st.z if z is None else z
@@ -260,9 +311,15 @@ class Navigator:
         target_alt: float | None = None,
         hold_z: float | None = None,
     ) -> None:
-        """Start flying a mode from the current state (a hold keeps ``hold_z`` when given)."""
+        """Start flying a mode from the current state (a hold keeps ``hold_z`` when given: the
+        takeoff's setpoint, ``Takeoff::on_active`` setLoiterItemFromCurrentPositionSetpoint)."""
+        hold_at = None
+        if nav_state == NavState.AUTO_LOITER and hold_z is None and not st.landed:
+            hold_at = self._loiter_position(st)
         self.nav_state = nav_state
         self._step = _Step(since=now, x=st.x, y=st.y, z=st.z if hold_z is None else hold_z, yaw=st.yaw)
+        if hold_at is not None:
+            self._step.x, self._step.y, self._step.z = hold_at
         # every navigator mode resets the cruise speed on activation (reset_cruising_speed in
         # Loiter, Land, Takeoff, RtlDirect and MissionBase::on_activation)
         self.speed = math.nan
@@ -279,8 +336,54 @@ class Navigator:
             self._step.rtl = self._rtl_start(st, now)
         elif nav_state == NavState.AUTO_MISSION and self.finished:
             self._step.phase = Phase.DONE
+        elif nav_state == NavState.AUTO_MISSION:
+            self._climb_z = self._climb_required(st)
         elif nav_state == NavState.ORBIT:
             self.orbit.activate(st.x, st.y, st.z, st.yaw)
+
+    def breaking_stop(self, st: State) -> tuple[float, float]:
+        """Navigator::calculate_breaking_stop: where a multicopter flying at its current
+        horizontal velocity stops, ``braking_distance`` ahead along its course."""
+        v = math.hypot(st.vx, st.vy)
+        if v <= 0.0:
+            return st.x, st.y
+        d = braking_distance(v, self.params["MPC_JERK_AUTO"], self.params["MPC_ACC_HOR"])
+        return st.x + st.vx / v * d, st.y + st.vy / v * d
+
+    def _loiter_position(self, st: State) -> tuple[float, float, float]:
+        """Loiter::set_loiter_position for a flying multicopter: the current setpoint when it is
+        a loiter the vehicle is already within NAV_ACC_RAD + NAV_LOITER_RAD of
+        (setLoiterItemFromCurrentPositionSetpoint), else the braking stop at the current altitude
+        (setLoiterItemFromCurrentPositionWithBreaking)."""
+        g = self._goal
+        if self._setpoint_is_loiter():
+            p = self.params
+            if math.hypot(g.x - st.x, g.y - st.y) <= p["NAV_ACC_RAD"] + p["NAV_LOITER_RAD"]:
+                return g.x, g.y, g.z
+        x, y = self.breaking_stop(st)
+        return x, y, st.z
+
+    def _setpoint_is_loiter(self) -> bool:
+        """position_setpoint_triplet.current.type is SETPOINT_TYPE_LOITER: a hold, a mission's
+        loiter item, the climb of a flying vehicle (LOITER_TO_ALT), or the loiter at its end."""
+        ns, s = self.nav_state, self._step
+        if ns == NavState.AUTO_LOITER:
+            return self._goal.kind is GoalKind.POSITION
+        if ns != NavState.AUTO_MISSION or self._goal.kind is not GoalKind.POSITION:
+            return False
+        if s.phase == Phase.DONE or (s.phase == Phase.TAKEOFF and "ground" not in s.extra):
+            return True
+        item = self.mission[self.current] if self.current < len(self.mission) else None
+        return item is not None and item.command in _LOITER_ITEMS and s.phase != Phase.START
+
+    def _climb_required(self, st: State) -> float | None:
+        """MissionBase::checkClimbRequired on activation: the first position item from the
+        current one, when it is more than NAV_MC_ALT_RAD above the vehicle, is climbed to first."""
+        for item in self.mission[self.current :]:
+            if has_position(item):
+                alt = item.alt_rel(self.home_alt)
+                return -alt if alt - -st.z > self.params["NAV_MC_ALT_RAD"] else None
+        return None
 
     # ------------------------------------------------------------------ the tick
 
@@ -304,6 +407,11 @@ class Navigator:
             return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
         if ns == NavState.ORBIT:
             return self.orbit.update(st.x, st.y, st.z, st.yaw, self.params["NAV_MC_ALT_RAD"], self._goal)
+        rep, self._gf_reposition = self._gf_reposition, None
+        if rep is not None and ns == NavState.AUTO_LOITER and now - rep[3] < 0.5:
+            # Loiter::on_activation / on_active: a reposition triplet under 500 ms old is flown
+            # (the geofence's: back to where the breach was seen)
+            s.x, s.y, s.z, s.yaw = rep[0], rep[1], rep[2], math.nan
         g = self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)  # hold
         if s.speed == s.speed:
             g.speed = s.speed
@@ -395,39 +503,20 @@ class Navigator:
                 return self._mission(st, now)
             else:
                 s.x, s.y, s.z = self._local(item, st)
-                if cmd == MavCmd.NAV_TAKEOFF:
-                    s.x, s.y = st.x, st.y
-                    s.phase = Phase.TAKEOFF
-                    # the item's heading (param4); NaN: FlightTaskAuto's MPC_YAW_MODE decides
-                    s.yaw = math.radians(item.param4) if math.isfinite(item.param4) else math.nan
-                    self.events.append(
-                        Event(EventKind.TEXT, (MavSeverity.INFO, f"Climb to {-s.z:.1f} meters above home"))
-                    )
-                elif cmd == MavCmd.NAV_LAND:
-                    # MissionBase::handleLanding MOVE_TO_LAND: at the current position setpoint's
-                    # altitude (the previous item's), else the current altitude
-                    prev = self._goal
-                    held = prev.kind in (GoalKind.POSITION, GoalKind.TAKEOFF) and not st.landed
-                    s.z = prev.z if held else st.z
-                    s.phase = Phase.FLY
-                elif st.landed:
-                    s.extra.update(after_takeoff=1.0, tx=st.x, ty=st.y)
-                    s.phase = Phase.TAKEOFF
-                    s.yaw = math.nan  # Mission's climb work item: "FlightTaskAuto handles yaw directly"
-                else:
-                    s.phase = Phase.FLY
+                self._start_position_item(item, st)
         if s.phase == Phase.TAKEOFF:
-            if "after_takeoff" in s.extra:  # implicit takeoff before the first waypoint
-                target_z = s.z  # the first position item's altitude (MissionBase's climb)
-                if st.landed or abs(st.z - target_z) > p["NAV_MC_ALT_RAD"]:
-                    return self._goal_set(GoalKind.TAKEOFF, s.extra["tx"], s.extra["ty"], target_z, s.yaw)
-                s.phase = Phase.FLY
-            else:
-                if st.landed or abs(st.z - s.z) > p["NAV_MC_ALT_RAD"]:
-                    return self._goal_set(GoalKind.TAKEOFF, s.x, s.y, s.z, s.yaw)
-                s.yaw = st.yaw
-                self._advance(st, now)
-                return self._mission(st, now)
+            # Mission::handleTakeoff's climb work item: straight up from where the mission started
+            # (a TAKEOFF setpoint from the ground, LOITER_TO_ALT in the air), yaw left to
+            # FlightTaskAuto; not reported as reached; then the item is flown to as a waypoint
+            tx, ty, cz = s.extra["tx"], s.extra["ty"], s.extra["cz"]
+            if "ground" in s.extra:
+                if st.landed or not self._takeoff_reached(st, cz):
+                    return self._goal_set(GoalKind.TAKEOFF, tx, ty, cz)
+            elif abs(st.z - cz) > p["NAV_MC_ALT_RAD"]:
+                return self._goal_set(GoalKind.POSITION, tx, ty, cz)
+            s.phase = Phase.FLY
+            # position_setpoint_triplet.previous: the climb's setpoint (setActiveMissionItems)
+            s.extra.update(prev_x=tx, prev_y=ty, prev_z=cz)
         if s.phase == Phase.FLY:
             radius = p["NAV_ACC_RAD"]
             if cmd == MavCmd.NAV_WAYPOINT and item.param2 > 0:
@@ -440,44 +529,36 @@ class Navigator:
                     self.events.append(Event(EventKind.REACHED, self.current))
                     s.phase = Phase.DESCEND
                 else:
-                    # MissionBlock::is_mission_item_reached_or_completed: the heading is waited
-                    # for only when the item carries one (param4); QGC and the runner send NaN,
-                    # so PX4 accepts the waypoint at once and FlightTaskAuto turns on the way on
                     s.phase = Phase.YAW
-                    s.since = now
-                    s.yaw = math.radians(item.param4) if math.isfinite(item.param4) else math.nan
+                    s.reached_at = now  # MissionBlock's _time_wp_reached
             else:
-                g = self._goal_set(GoalKind.POSITION, s.x, s.y, s.z)
+                # the item's heading (NaN: FlightTaskAuto's MPC_YAW_MODE) is the setpoint's yaw
+                # all the way there (FlightTaskAuto::_evaluateTriplets: current.yaw when finite)
+                g = self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
                 if "prev_x" in s.extra:
                     g.prev = (s.extra["prev_x"], s.extra["prev_y"], s.extra["prev_z"])
                 g.acc_rad = radius
                 # Mission::setActiveMissionItems: a waypoint without a hold time hands its
                 # successor to the triplet's next, so the trajectory turns through the corner
                 # instead of stopping (a hold time or autocontinue 0 brakes: next invalid)
-                if cmd in _PASS_THROUGH and item.param1 <= 0 and item.autocontinue:
+                if cmd in _PASS_THROUGH and self._time_inside(item) <= 0 and item.autocontinue:
                     if s.next is None:  # once per item
                         s.next = self._next_setpoint(self.current, st) or NO_NEXT
                     g.next = s.next
                 return g
         if s.phase == Phase.YAW:
-            err = abs(wrap_pi(s.yaw - st.yaw)) if math.isfinite(s.yaw) else 0.0
-            timeout = p["MIS_YAW_TMT"]
-            if not math.isfinite(s.yaw):
-                s.yaw = st.yaw  # the heading held while the item's hold time runs
-            if (
-                not self.yaw_acceptance
-                or err <= math.radians(p["MIS_YAW_ERR"])
-                or (timeout > 0 and now - s.since >= timeout)
-            ):
-                s.phase = Phase.HOLD
-                s.since = now
-            else:
+            if not self._heading_reached(st, now):
                 return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
+            if not math.isfinite(s.yaw):
+                # FlightTaskAuto::_set_heading_from_mode: inside the acceptance radius the heading
+                # locks where it is, and stays so while the item's hold time runs
+                s.yaw = st.yaw
+            s.phase = Phase.HOLD
         if s.phase == Phase.HOLD:
             if cmd == MavCmd.NAV_LOITER_UNLIM:
                 return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
-            hold = item.param1 if cmd in (MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_TIME) else 0.0
-            if now - s.since < hold:
+            # the hold time counts from the arrival (_time_wp_reached), the heading's wait included
+            if now - s.reached_at < self._time_inside(item):
                 return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
             self._advance(st, now)
             return self._mission(st, now)
@@ -487,6 +568,83 @@ class Navigator:
                 return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
             return self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
         return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
+
+    def _start_position_item(self, item: NavItem, st: State) -> None:
+        """Mission::setActiveMissionItems for a position item (its target already in the step):
+        the climb owed before it (handleTakeoff), the move to a land item at altitude
+        (MissionBase::handleLanding), the item's heading (param4) and force_heading."""
+        s = self._step
+        cmd = item.command
+        if cmd == MavCmd.NAV_LAND:
+            # MOVE_TO_LAND: at the current position setpoint's altitude (the previous item's),
+            # else the current altitude; the heading ignored. handleLanding resets the triplet's
+            # previous, but setActiveMissionItems then sets it to the last setpoint again (the
+            # work item was still DEFAULT): the track runs from the last waypoint, as PX4 logs it
+            prev = self._goal
+            held = prev.kind in (GoalKind.POSITION, GoalKind.TAKEOFF) and not st.landed
+            s.z = prev.z if held else st.z
+            s.phase = Phase.FLY
+            return
+        climb, self._climb_z = self._climb_z, None
+        if climb is None and st.landed:
+            climb = s.z  # on the ground in mission mode without an activation: take off to it
+        if climb is not None and climb < st.z:
+            s.extra.update(tx=st.x, ty=st.y, cz=climb)
+            if st.landed:
+                s.extra["ground"] = 1.0
+            s.phase = Phase.TAKEOFF
+            text = f"Climb to {-climb:.1f} meters above home"
+            self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, text)))
+        else:
+            s.phase = Phase.FLY
+        # MAVLink's param4 in degrees (mavlink_mission.cpp); a TAKEOFF is flown as a waypoint
+        # with its yaw ignored (handleTakeoff: "otherwise it might yaw before ...")
+        yaw = item.param4 if cmd in _HEADING_ITEMS else math.nan
+        s.yaw = wrap_pi(math.radians(yaw)) if math.isfinite(yaw) else math.nan
+        s.force_heading = cmd == MavCmd.NAV_LOITER_TIME and item.param2 > 0
+
+    def _takeoff_reached(self, st: State, z: float) -> bool:
+        """is_mission_item_reached_or_completed for a multicopter's TAKEOFF: altitude only, above
+        the target less NAV_MC_ALT_RAD (half the takeoff altitude when that is smaller)."""
+        rad = self.params["NAV_MC_ALT_RAD"]
+        alt = -z
+        if 0.0 < alt < rad:
+            rad = alt / 2.0
+        return -st.z > alt - rad
+
+    @staticmethod
+    def _time_inside(item: NavItem) -> float:
+        """MissionBlock::get_time_inside: a waypoint's or LOITER_TIME's param1, never negative."""
+        if item.command in (MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_TIME):
+            return max(item.param1, 0.0)
+        return 0.0
+
+    def _heading_reached(self, st: State, now: float) -> bool:
+        """is_mission_item_reached_or_completed's heading for a multicopter: none to accept
+        (NaN, or obstacle avoidance's NaN yaw_acceptance: get_yaw_to_be_accepted) is reached;
+        else within MIS_YAW_ERR, or at once when MIS_YAW_TMT is set and the heading not forced.
+        A forced heading not reached MIS_YAW_TMT after the arrival fails the mission."""
+        s = self._step
+        if not self.yaw_acceptance or not math.isfinite(s.yaw):
+            return True
+        p = self.params
+        timeout = p["MIS_YAW_TMT"]
+        if abs(wrap_pi(s.yaw - st.yaw)) < math.radians(p["MIS_YAW_ERR"]):
+            return True
+        if timeout >= FLT_EPSILON:
+            if not s.force_heading:
+                return True
+            if now - s.reached_at >= timeout:
+                self._mission_failure_heading_timeout()
+        return False
+
+    def _mission_failure_heading_timeout(self) -> None:
+        """Navigator::set_mission_failure_heading_timeout: mission_result.failure, said once."""
+        if not self.failure:
+            self.failure = True
+            text = (MavSeverity.CRITICAL, "unable to reach heading within timeout")
+            self.events.append(Event(EventKind.TEXT, text))
+            self.events.append(Event(EventKind.FAILURE))
 
     # ------------------------------------------------------------------ return to launch
 
