@@ -140,10 +140,11 @@ class _Step:
 
 
 def braking_distance(velocity: float, jerk: float, accel: float) -> float:
-    """math::trajectory::computeBrakingDistanceFromVelocity as Navigator::calculate_breaking_stop
-    calls it (MPC_JERK_AUTO, MPC_ACC_HOR, a delay acceleration of 0.6 MPC_JERK_AUTO): the distance
-    to brake from ``velocity``, v (v / 2a + 0.6)."""
-    return velocity * (velocity / (2.0 * accel) + 0.6 * jerk / jerk)
+    """The distance to brake from ``velocity`` as Navigator::calculate_breaking_stop computes it:
+    math::trajectory::computeBrakingDistanceFromVelocity(v, MPC_JERK_AUTO, MPC_ACC_HOR, 0.6
+    MPC_JERK_AUTO), v (v / 2a + a_delay / j): the delay term is 0.6 s of the velocity."""
+    accel_delay_max = 0.6 * jerk
+    return velocity * (velocity / (2.0 * accel) + accel_delay_max / jerk)
 
 
 class Navigator:
