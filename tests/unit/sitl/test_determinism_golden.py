@@ -248,27 +248,31 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: the auto modes' climb-rate limits (MulticopterPositionControl's setVelocityLimits) and the
 #: landing speed's PX4 parameters (MPC_Z_VEL_MAX_DN, MPC_Z_V_AUTO_DN's cap, MPC_LAND_CRWL) (stop 23);
 #: params_and_commands again for MIS_TAKEOFF_ALT as Takeoff's default, not a minimum, and the
-#: cruise speed reset on every navigator mode's activation, as PX4 v1.15's navigator does (stop 23).
+#: cruise speed reset on every navigator mode's activation, as PX4 v1.15's navigator does (stop 23);
+#: mission, manual_and_rtl, datalink_loss and params_and_commands for PX4 v1.15's commander timing:
+#: the auto-disarm COM_DISARM_LAND after landing in Return / Land (one tick after the mission has
+#: finished for a mission armed on the ground: handleAutoDisarm's hysteresis), and the RC and data
+#: link failsafes held COM_FAIL_ACT_T in Hold first, with PX4's texts (failsafe framework).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "c6c96c45772664683306ec270172d0ca9c4ff5f2145582218ca41766799d8937",
-        "6541fa83c5b91046b135b686b09a32272006b1a5ea7bd3a8d51a2e427671f217",
+        "0bbf40c97696c5b05432ff473141fc078095dce8e97ec3b72e9d2be113dc19bd",
+        "4e7ae539fb78eddda2d976225bf4a5f76cb0d6d147531259101e910e57322f6f",
     ),
     "manual_and_rtl": (
-        "92130f9511744f8ef22e90233b49a2681284840bbc11c7e88273cee8bd7f9f80",
-        "35ef12836d7da20d01e07698317f07b741d9ce5ebb808ae0f01d2990a9debcc4",
+        "0708d1fd79c0a22dfc7aab9c97d30d2ae1470769d9215b4c3a892dd2580fcd7c",
+        "1d969e859de3bd214bd9c7d5a0359aee638c112cd3eccc7525777a2f564c117d",
     ),
     "datalink_loss": (
-        "0abfc6dfae481f61e4f4ad6a7b5cc5285edbd8c0d70c30bb632d7384d71607bc",
-        "b864d0b94d63c2fab5ad69d384b605318fc4e16f14777ab972a9a97537fb6bdc",
+        "035a1aadd497499688ed220e62716dc68ebba836ef77a0a277de7075cf687cd2",
+        "d82d38c571cf27920872351897e4b92dd81cbd79a021bde869f2b74af58a45a4",
     ),
     "crash": (
         "d1dd9881d342faa95513677ef1fd9039b9090b3d392ebe3e2d01397e1b862bc9",
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "4b5e47f540117a3682b9e95013a5eb470defa82700d70ee1854e7b2992558cbd",
-        "c38fa5f18b8e3ebeb9f1177f0edd00cb4cd5372b3a2111b4c0d11e8c61259c50",
+        "75465fb955bef4d66df4cbef2f4b56e6f6b0406ab3861b1318405df7011b21dd",
+        "07645576e00009df8075420f199a1fb437adbed6f3c18e20b3e7691d1648baae",
     ),
 }
 
