@@ -87,9 +87,12 @@ def test_battery_drains_warns_then_returns_and_lands(vehicle: LockstepClient):
     text(c, "Low battery level, return advised")
     low = c.wait(lambda m: m.get_type() == "BATTERY_STATUS")
     assert low.charge_state == 2 and low.battery_remaining < 60 and low.voltages[0] < 16200
-    text(c, "Critical battery level: switching to return")
-    c.wait(lambda m: m.get_type() == "HEARTBEAT" and mode(m) == (4, 5))  # AUTO RTL
-    text(c, "Emergency battery level: switching to land")
+    # PX4 v1.15's failsafe framework: COM_FAIL_ACT_T (5 s) in Hold, then Return
+    text(c, "Critical battery level: switching to RTL")  # "... in 5 seconds" (chunked)
+    text(c, "Failsafe activated: entering Hold for 5 seconds", vehicle_s=1)
+    c.wait(lambda m: m.get_type() == "HEARTBEAT" and mode(m) == (4, 3), vehicle_s=2)  # AUTO LOITER
+    c.wait(lambda m: m.get_type() == "HEARTBEAT" and mode(m) == (4, 5), vehicle_s=7)  # AUTO RTL
+    text(c, "Emergency battery level: switching to Land")  # already in a failsafe: no hold
     c.wait(lambda m: m.get_type() == "HEARTBEAT" and mode(m) == (4, 6))  # AUTO LAND
     c.wait(lambda m: m.get_type() == "HEARTBEAT" and not m.base_mode & 128, vehicle_s=120)
     # disarmed: full again (through the 1 s voltage filter)
@@ -110,7 +113,9 @@ def test_rc_loss_in_position_mode_returns(vehicle: LockstepClient):
             c.conn.mav.manual_control_send(1, 300, 0, 500, 0, 0)
             c.conn.mav.named_value_int_send(m.value, b"LOCKSTEP", m.value + 50)
     text(c, "Manual control lost", vehicle_s=5)
-    c.wait(lambda m: m.get_type() == "HEARTBEAT" and mode(m) == (4, 5), vehicle_s=3)  # AUTO RTL
+    text(c, "Failsafe activated: entering Hold for 5 seconds", vehicle_s=1)
+    c.wait(lambda m: m.get_type() == "HEARTBEAT" and mode(m) == (4, 3), vehicle_s=2)  # AUTO LOITER
+    c.wait(lambda m: m.get_type() == "HEARTBEAT" and mode(m) == (4, 5), vehicle_s=7)  # AUTO RTL
 
 
 def test_motor_off_crashes(vehicle: LockstepClient):

@@ -725,6 +725,7 @@ class Vehicle:
             self.body.yaw_rate_gains = YawRateGains.of(self.params)
         self._setup_collision_prevention()
         self.sim.battery.update_params()
+        self.commander.params_updated()
 
     # ------------------------------------------------------------------ navigator events
 
@@ -744,6 +745,7 @@ class Vehicle:
                 changed = True
             elif ev.kind is EventKind.FINISHED or ev.kind is EventKind.FAILURE:
                 changed = True
+                self.commander.mission_finished(t)
             elif ev.kind is EventKind.TEXT:
                 severity, text = ev.value  # type: ignore[misc]
                 self.text(severity, text)

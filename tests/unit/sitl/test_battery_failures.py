@@ -109,10 +109,10 @@ def test_battery_warnings_then_com_low_bat_act_return_then_land():
     f.fly(60, until=lambda v: v.battery.warning >= 1)
     f.fly(0.1)
     assert f.said("Low battery level, return advised") and f.v.nav_state == NavState.AUTO_LOITER
-    f.fly(60, until=lambda v: v.nav_state == NavState.AUTO_RTL)
-    assert f.v.battery.warning == 2 and f.said("Critical battery level: switching to return")
+    f.fly(60, until=lambda v: v.nav_state == NavState.AUTO_RTL)  # after COM_FAIL_ACT_T in Hold
+    assert f.v.battery.warning == 2 and f.said("Critical battery level: switching to RTL")
     f.fly(60, until=lambda v: v.nav_state == NavState.AUTO_LAND or not v.armed)
-    assert f.v.nav_state == NavState.AUTO_LAND and f.said("Emergency battery level: switching to land")
+    assert f.v.nav_state == NavState.AUTO_LAND and f.said("Emergency battery level: switching to Land")
     f.fly(60, until=lambda v: not v.armed)
     assert f.v.landed and not f.v.armed
     assert f.last["BATTERY_STATUS"].fields["charge_state"] == 4  # EMERGENCY
@@ -159,14 +159,16 @@ def test_rc_loss_in_posctl_returns():
     assert f.command(MavCmd.DO_SET_MODE, 1, 3, 0) == MavResult.ACCEPTED  # POSCTL
     f.fly(2, each=lambda: f.sticks(300, 0, 500, 0))
     f.fly(2)
-    assert f.said("Manual control lost") and f.v.nav_state == NavState.AUTO_RTL
+    assert f.said("Manual control lost") and f.v.nav_state == NavState.AUTO_LOITER  # COM_FAIL_ACT_T
+    f.fly(5)
+    assert f.v.nav_state == NavState.AUTO_RTL
 
 
 def test_rc_loss_applies_in_hold_too_unless_com_rcl_except():
     f = Flight(NAV_RCL_ACT=3)
     f.takeoff()
     f.fly(1, each=f.sticks)
-    f.fly(2)
+    f.fly(6)  # COM_FAIL_ACT_T (5 s) in Hold first
     assert f.v.nav_state == NavState.AUTO_LAND
     g = Flight(NAV_RCL_ACT=3, COM_RCL_EXCEPT=2)  # hold exempt
     g.takeoff()

@@ -251,26 +251,31 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: cruise speed reset on every navigator mode's activation, as PX4 v1.15's navigator does (stop 23);
 #: every log for NAV_LOITER_RAD, now modelled, moved among the parameters (their order; the
 #: flights' telemetry is unchanged), params_and_commands' telemetry too (PARAM_VALUE indices).
+#: mission, manual_and_rtl, datalink_loss and params_and_commands for PX4 v1.15's commander timing:
+#: the auto-disarm COM_DISARM_LAND after landing in Return / Land (one tick after the mission has
+#: finished for a mission armed on the ground: handleAutoDisarm's hysteresis), and the RC and data
+#: link failsafes held COM_FAIL_ACT_T in Hold first, with PX4's texts (failsafe framework).
+#: stop 24, both together: the failsafe's Hold (COM_FAIL_ACT_T) now holds at the braking stop.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "7aba28f318060644fbfaa8f6ee447ebc90ca8007fab67b61c71f1cae44da1121",
-        "6541fa83c5b91046b135b686b09a32272006b1a5ea7bd3a8d51a2e427671f217",
+        "1bdf7e16f1548b8f3d06941ec8527ffea228f7f7b5023e591ddb6ee59b061475",
+        "4e7ae539fb78eddda2d976225bf4a5f76cb0d6d147531259101e910e57322f6f",
     ),
     "manual_and_rtl": (
-        "9d1c50464ee6957a97fc52918b0ec3e16b9330ce26255b82198a17b88bfc3435",
-        "35ef12836d7da20d01e07698317f07b741d9ce5ebb808ae0f01d2990a9debcc4",
+        "4e61a10cd52866529be26abd602c1eabc233a88d81aa732b23aab6be11d50d1d",
+        "9a7ba4d7c950308fda8f3ad318c28a3ea4b0f7ba8016b7ad66c6e7b4260fa83d",
     ),
     "datalink_loss": (
-        "4ac4e1e8eb4fa436c564d6ea055d640297472204675575099f473384cc7d6f9d",
-        "b864d0b94d63c2fab5ad69d384b605318fc4e16f14777ab972a9a97537fb6bdc",
+        "0ba53781c3527d968f4a69e17207520fc4e0ba84fcbafda6b25a431036cd42c3",
+        "c4a06a38305a54cb3c7b5ed58856c49a69b6902f6bbbc0e0b246832b4e06e7e6",
     ),
     "crash": (
         "5ae9edf2fd218727c0b42f2448cbfb65b78714fb8ba294d63577227f58a349e3",
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "fa2639ea0de67c47f4fe21a8759f44a53c62bd96cd49f0717d49926136899210",
-        "2b55f5f751cb2b87f125031cd178108716abfa5f115522e85301e5740965cd84",
+        "be2acbee62d8413d1f9625bcade18fe1f58b37a0d86de89fd9cd0017c46ab6a7",
+        "cf6d0c3428e2103bf37833516e0df54a6306ac643832cd57e038025987c09cd9",
     ),
 }
 

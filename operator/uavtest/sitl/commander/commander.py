@@ -13,7 +13,6 @@ from typing import TYPE_CHECKING
 from uavtest.px4.modes import (
     ARMING_STATE_ARMED,
     ARMING_STATE_DISARMED,
-    AUTO_NAV_STATES,
     MANUAL_NAV_STATES,
     NavState,
 )
@@ -21,7 +20,7 @@ from uavtest.sitl import mav
 from uavtest.sitl.commander.arming import Reason, arming_denied
 from uavtest.sitl.commander.failsafe import (
     ACTION_NAV_STATE,
-    BATTERY_TEXT,
+    BATTERY_CAUSE,
     DATA_LINK_LOST,
     GEOFENCE_TEXTS,
     GF_ACTION_NAV_STATE,
@@ -33,13 +32,18 @@ from uavtest.sitl.commander.failsafe import (
     RCL_EXCEPT_HOLD,
     RCL_EXCEPT_MISSION,
     RCL_EXCEPT_OFFBOARD,
+    Cause,
     Condition,
+    FailsafeFramework,
     GeofenceAction,
     NavAction,
     OffboardLossAction,
+    Selected,
     actuator_failure_action,
     battery_action,
+    notify_texts,
 )
+from uavtest.sitl.hysteresis import Hysteresis
 from uavtest.sitl.land_detector import Transition
 from uavtest.sitl.mav import MavResult, MavSeverity
 from uavtest.sitl.mavlink_streams import STREAMS, home_position
@@ -52,6 +56,21 @@ if TYPE_CHECKING:
 __all__ = ["READY_US", "Commander"]
 
 READY_US = 1_500_000  # estimator converged, home set
+
+#: the failsafe framework's action → the nav state it flies (FailsafeBase::modeFromAction)
+_FRAMEWORK_NAV_STATE: dict[int, NavState] = {
+    NavAction.HOLD: NavState.AUTO_LOITER,
+    NavAction.RETURN: NavState.AUTO_RTL,
+    NavAction.LAND: NavState.AUTO_LAND,
+}
+#: nav states of failsafe actions worse than Hold (clearDelayIfNeeded: no delay on top of them)
+_BEYOND_HOLD = frozenset({NavState.AUTO_RTL, NavState.AUTO_LAND, NavState.DESCEND})
+
+
+def _framework_flies(selected: Selected) -> bool:
+    """The framework's selection puts the vehicle in a mode of its own (Hold, Return, Land)."""
+    return selected.action in _FRAMEWORK_NAV_STATE
+
 
 #: The nav states the built-in vehicle flies: a mode change to any other is answered
 #: UNSUPPORTED with a STATUSTEXT (``vehicle_command.unsupported``). Extend it with a new mode.
@@ -113,16 +132,25 @@ class Commander:
         self.status_dirty = True  # vehicle_status changed: log it now, not at the next 1 Hz slot
         self._gf_active = False  # a geofence breach has been acted on (until it clears)
         self._gf_pending: tuple[NavState, int] | None = None  # GF action after COM_FAIL_ACT_T hold
+        #: data link, manual control, battery and motor failsafes (FailsafeBase: COM_FAIL_ACT_T)
+        self._fw = FailsafeFramework(self.params["COM_FAIL_ACT_T"])
+        self._taken_off = False  # _have_taken_off_since_arming
+        self._auto_disarm_landed = Hysteresis(False)
 
     @property
     def home_count(self) -> int:
         return self._home_count
+
+    def params_updated(self) -> None:
+        """A parameter changed (Commander.cpp ``updateParameters``, FailsafeBase ``updateParams``)."""
+        self._fw.params_updated(self.params["COM_FAIL_ACT_T"])
 
     def gcs_heartbeat(self, t: int) -> None:
         self._last_gcs_us = t
         if self.gcs_lost:
             self.gcs_lost = False
             self.v.text(MavSeverity.INFO, "Data link regained")
+            self._fw.clear(DATA_LINK_LOST.action_param)
 
     def manual_control(self, t: int, sticks: tuple[float, float, float, float]) -> None:
         if int(self.params["COM_RC_IN_MODE"]) in (0, RC_IN_MODE_DISABLED):
@@ -133,6 +161,7 @@ class Commander:
         if self.rc_lost:
             self.rc_lost = False
             self.v.text(MavSeverity.INFO, "Manual control regained")
+            self._fw.clear(MANUAL_CONTROL_LOST.action_param)
 
     def status(self, t: int) -> VehicleStatus:
         land = self.land
@@ -167,6 +196,7 @@ class Commander:
         if transition is not None:
             self.status_dirty = True
             if transition is Transition.TAKEOFF:
+                self._taken_off = True
                 self.v.text(MavSeverity.INFO, "Takeoff detected")
             elif transition is Transition.LANDED:
                 self.v.text(MavSeverity.INFO, "Landing detected")
@@ -181,26 +211,43 @@ class Commander:
             return
         if self.user_nav_state == NavState.OFFBOARD and self._offboard_loss(t):
             return
-        if land.landed:
-            self._auto_disarm(t)
+        self._auto_disarm(t)
+        if not self.armed:
             return
-        self._check_failsafes(t)
+        if not land.landed:
+            self._check_failsafes(t)
+        self._failsafe_update(t)
 
     def _auto_disarm(self, t: int) -> None:
-        """Landed and armed: disarm after a flight (at once in auto modes), or unused (preflight)."""
+        """Commander.cpp ``handleAutoDisarm``: after a takeoff, landed for COM_DISARM_LAND seconds
+        (<= 0: never) → "Disarmed by landing"; never taken off, armed for COM_DISARM_PRFLT seconds
+        → "Disarmed by auto preflight disarming". A landing in Mission mode counts only once the
+        mission is finished (``landed_amid_mission``): its time starts then, not at the landing."""
         p = self.params
-        land = self.land
-        if land.takeoff_us > self.armed_at_us:
-            if self.nav_state in AUTO_NAV_STATES:
-                self.nav.update(self.st, t / 1e6)  # the navigator sees the landing first (finished)
-                self.v.drain_nav_events()
-                if self.nav_state == NavState.AUTO_MISSION and self.nav.finished:
-                    self.v.text(MavSeverity.INFO, "Mission finished, landed")
+        land_s, preflight_s = p["COM_DISARM_LAND"], p["COM_DISARM_PRFLT"]
+        if land_s <= 0 and preflight_s <= 0:
+            return
+        hyst = self._auto_disarm_landed
+        landed_amid_mission = self.nav_state == NavState.AUTO_MISSION and not self.nav.finished
+        if land_s > 0 and not landed_amid_mission and self._taken_off:
+            hyst.set_hysteresis_time_from(False, round(land_s * 1e6))
+            hyst.set_state_and_update(self.land.landed, t)
+        elif preflight_s > 0 and not self._taken_off:
+            hyst.set_hysteresis_time_from(False, round(preflight_s * 1e6))
+            hyst.set_state_and_update(True, t)
+        if hyst.state:
+            if self._taken_off:
                 self.disarm(t, Reason.AUTO_DISARM_LAND, "Disarmed by landing")
-            elif p["COM_DISARM_LAND"] > 0 and t - land.landed_at_us >= p["COM_DISARM_LAND"] * 1e6:
-                self.disarm(t, Reason.AUTO_DISARM_LAND, "Disarmed by landing")
-        elif p["COM_DISARM_PRFLT"] > 0 and t - self.armed_at_us >= p["COM_DISARM_PRFLT"] * 1e6:
-            self.disarm(t, Reason.AUTO_DISARM_PREFLIGHT, "Disarmed by auto preflight disarming")
+            else:
+                self.disarm(t, Reason.AUTO_DISARM_PREFLIGHT, "Disarmed by auto preflight disarming")
+
+    def mission_finished(self, t: int) -> None:
+        """Commander.cpp ``checkForMissionUpdate``: a mission finished in the air while in
+        Mission mode → the user's mode becomes Hold (the navigator loiters where it ended)."""
+        if self.armed and not self.land.landed and self.nav_state == NavState.AUTO_MISSION:
+            self._fw.mode_change()
+            self.user_nav_state = NavState.AUTO_LOITER
+            self.switch(NavState.AUTO_LOITER, t)
 
     def _check_failsafes(self, t: int) -> None:
         """Failsafes in the air (failsafe.cpp ``checkStateAndMode``): data link, manual control,
@@ -211,6 +258,7 @@ class Commander:
             and self._last_gcs_us is not None
             and not self.gcs_lost
             and t - self._last_gcs_us > p["COM_DL_LOSS_T"] * 1e6
+            and self.user_nav_state != NavState.AUTO_LAND  # gcs_connection_loss_ignored
         ):
             self.gcs_lost = True
             self._failsafe(DATA_LINK_LOST, t)
@@ -329,7 +377,12 @@ class Commander:
                 self._attitude_failure(t)
             if new & 128:
                 self.v.text(MavSeverity.CRITICAL, "Motor failure detected")
-                self._act(actuator_failure_action(int(self.params["COM_ACT_FAIL_ACT"])), t)
+                action = actuator_failure_action(int(self.params["COM_ACT_FAIL_ACT"]))
+                if action == NavAction.TERMINATE:
+                    self._act(action, t)
+                else:  # Warn, Hold, Return, Land: the framework (Return and Land clear on a mode change)
+                    sticky = action in (NavAction.RETURN, NavAction.LAND)
+                    self._framework_add("fd_motor_failure", action, Cause.GENERIC, sticky)
 
     def _rc_loss_ignored(self) -> bool:
         """COM_RC_IN_MODE 4, COM_RCL_EXCEPT for the user's mode, or no sticks when armed."""
@@ -345,15 +398,13 @@ class Commander:
         )
 
     def _battery_failsafe(self, t: int) -> None:
+        """failsafe.cpp: only the current warning level's check runs, so a lower level's action
+        goes (not activated) as the new one comes (``fromBatteryWarningActParam``)."""
         level = self.battery_warning
         action = battery_action(int(self.params["COM_LOW_BAT_ACT"]), level)
-        if action == NavAction.WARN:
-            severity, text = BATTERY_TEXT[level]
-            self.v.text(MavSeverity[severity], text)
-            return
-        cause = "Critical battery level" if level == 2 else "Emergency battery level"
-        self.v.text(MavSeverity.CRITICAL, f"{cause}: switching to {action.name.lower()}")
-        self._act(action, t)
+        for lower in range(1, level):
+            self._fw.clear(f"battery_warning_{lower}")
+        self._framework_add(f"battery_warning_{level}", action, BATTERY_CAUSE[level], sticky=False)
 
     def _check_position(self, t: int) -> None:
         """Mode fallback without a position (failsafe.cpp ``checkModeFallback``): the auto modes
@@ -403,27 +454,60 @@ class Commander:
             self._act(NavAction.TERMINATE, t)
 
     def _failsafe(self, condition: Condition, t: int) -> None:
-        """Report the condition, then take the action its parameter chooses (``ACTION_NAV_STATE``)."""
+        """Report the condition, then the action its parameter chooses
+        (``fromNavDllOrRclActParam``): terminate and disarm at once, Hold / Return / Land through
+        the framework (Return stays until a mode change once the condition clears)."""
         self.v.text(MavSeverity.CRITICAL, condition.text)
-        self._act(int(self.params[condition.action_param]), t)
+        action = int(self.params[condition.action_param])
+        if action in (NavAction.TERMINATE, NavAction.DISARM):
+            self._act(action, t)
+        elif action in (NavAction.HOLD, NavAction.RETURN, NavAction.LAND):
+            sticky = action == NavAction.RETURN
+            self._framework_add(condition.action_param, NavAction(action), condition.cause, sticky)
+
+    def _framework_add(self, key: str, action: NavAction, cause: Cause, sticky: bool) -> None:
+        self._fw.add(key, action, cause, sticky=sticky, fail_act_t=self.params["COM_FAIL_ACT_T"])
+
+    def _failsafe_update(self, t: int) -> None:
+        """Commander.cpp ``handleModeIntentionAndFailsafe`` for the framework's actions: what it
+        selects is flown (``modeFromAction``: Hold, Return, Land; Warn and nothing leave the
+        user's mode) and announced (``notifyUser``). When its action goes because the condition
+        cleared, the vehicle goes back to the user's mode."""
+        fw = self._fw
+        before = fw.selected
+        beyond_hold = self.failsafe and self.nav_state in _BEYOND_HOLD and not _framework_flies(before)
+        if fw.update(t, self.params["COM_FAIL_ACT_T"], self.user_nav_state, beyond_hold):
+            for severity, text in notify_texts(fw.selected, fw.delay_us):
+                self.v.text(severity, text)
+        after = fw.selected
+        if after == before or self.position_fallback:
+            return
+        target = _FRAMEWORK_NAV_STATE.get(after.action)
+        was = _FRAMEWORK_NAV_STATE.get(before.action)
+        if target is not None:
+            self.failsafe = True
+            self.status_dirty = True
+            self.switch(target, t)
+        elif was is not None:  # the action went: the condition cleared, or the user took over
+            self.failsafe = False
+            self.status_dirty = True
+            if self.nav_state == was:
+                self.switch(self.user_nav_state, t)
 
     def _act(self, action: int, t: int) -> None:
-        if action in (NavAction.DISABLED, NavAction.WARN):
-            return
+        """The actions that do not wait: terminate (cut the motors) and disarm (lockdown)."""
         self.failsafe = True
         if action == NavAction.TERMINATE:
             self.v.text(MavSeverity.CRITICAL, "Failsafe: flight termination")
             self.body.motors = False
             self.crashed = True
-            return
-        if action == NavAction.DISARM:
+        elif action == NavAction.DISARM:
             self.disarm(t, Reason.FAILSAFE, "Disarmed by failsafe")
-            return
-        target = ACTION_NAV_STATE.get(action)
-        if target is not None:
-            name = target.name.lower().replace("auto_", "")
-            self.v.text(MavSeverity.WARNING, f"Failsafe activated: {name}")
-            self.switch(target, t)
+
+    def user_mode_change(self) -> None:
+        """The user asked for a mode (``UserModeIntention::change``): the failsafe framework lets
+        them take over from its Hold, Return or Land."""
+        self._fw.mode_change()
 
     def ground_impact(self, t: int) -> None:
         """The vehicle fell to the ground out of control (a motor failed): a crash."""
@@ -466,6 +550,9 @@ class Commander:
         self.failsafe = False
         self._gf_active = False
         self._gf_pending = None
+        self._fw.reset()
+        self._taken_off = False
+        self._auto_disarm_landed.set_state_and_update(False, t)
         rtl_type = int(self.params["RTL_TYPE"])
         if rtl_type != 0:
             self.v.text(MavSeverity.WARNING, f"RTL_TYPE {rtl_type} not modelled: Return flies RTL_TYPE 0")
@@ -481,6 +568,9 @@ class Commander:
 
     def disarm(self, t: int, reason: int, text: str) -> None:
         self.armed = False
+        self._fw.reset()
+        self._taken_off = False  # Commander::disarm: _have_taken_off_since_arming
+        self._auto_disarm_landed.set_state_and_update(False, t)
         self.disarming_reason = reason
         self.body.motors = False
         self.status_dirty = True
@@ -512,6 +602,7 @@ class Commander:
         if ns == NavState.AUTO_MISSION and not self.nav.mission_valid:
             self.v.text(MavSeverity.CRITICAL, "Mode not available: no valid mission")
             return MavResult.TEMPORARILY_REJECTED
+        self.user_mode_change()
         self.user_nav_state = ns
         self.failsafe = False
         self._offboard_lost = False

@@ -79,6 +79,7 @@ def _takeoff(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
         return MavResult.DENIED
     p7 = c.param7
     alt = p7 - cmdr.home[5] + cmdr.home[2] if math.isfinite(p7) else None
+    cmdr.user_mode_change()
     cmdr.user_nav_state = NavState.AUTO_TAKEOFF
     cmdr.switch(NavState.AUTO_TAKEOFF, v.time_us, target_alt=alt)
     return MavResult.ACCEPTED
@@ -156,6 +157,7 @@ def _orbit(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
     if cmdr.crashed:
         v.text(MavSeverity.CRITICAL, "Orbit command rejected")
         return MavResult.TEMPORARILY_REJECTED
+    cmdr.user_mode_change()
     cmdr.user_nav_state = NavState.ORBIT
     cmdr.failsafe = False
     cmdr.switch(NavState.ORBIT, v.time_us)

@@ -313,13 +313,29 @@ class Navigator:
         hold_z: float | None = None,
     ) -> None:
         """Start flying a mode from the current state (a hold keeps ``hold_z`` when given: the
-        takeoff's setpoint, ``Takeoff::on_active`` setLoiterItemFromCurrentPositionSetpoint)."""
+        takeoff's setpoint, ``Takeoff::on_active`` setLoiterItemFromCurrentPositionSetpoint).
+
+        Hold after a mission that finished in the air keeps the mission's end-of-mission loiter
+        point (Navigator::run does not reset a valid loiter setpoint when switching to Loiter, and
+        Loiter::set_loiter_position, within the loiter radius of it, keeps it); Hold from any
+        other flight holds where the vehicle can stop (``_loiter_position``)."""
+        old = self._step
+        ended = (
+            nav_state == NavState.AUTO_LOITER
+            and self.nav_state == NavState.AUTO_MISSION
+            and self.finished
+            and old.phase == Phase.DONE
+            and not st.landed
+            and hold_z is None
+        )
         hold_at = None
-        if nav_state == NavState.AUTO_LOITER and hold_z is None and not st.landed:
+        if nav_state == NavState.AUTO_LOITER and hold_z is None and not st.landed and not ended:
             hold_at = self._loiter_position(st)
         self.nav_state = nav_state
         self._step = _Step(since=now, x=st.x, y=st.y, z=st.z if hold_z is None else hold_z, yaw=st.yaw)
-        if hold_at is not None:
+        if ended:
+            self._step.x, self._step.y, self._step.z, self._step.yaw = old.x, old.y, old.z, old.yaw
+        elif hold_at is not None:
             self._step.x, self._step.y, self._step.z = hold_at
         # every navigator mode resets the cruise speed on activation (reset_cruising_speed in
         # Loiter, Land, Takeoff, RtlDirect and MissionBase::on_activation)
@@ -399,6 +415,8 @@ class Navigator:
             self.events.append(Event(EventKind.HOLD, s.z))
             return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
         if ns == NavState.AUTO_LAND:
+            if st.landed:  # Land::on_active: landed → the idle setpoint (motors at idle, armed)
+                return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
             return self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
         if ns == NavState.AUTO_RTL:
             if s.rtl is None:
@@ -445,7 +463,7 @@ class Navigator:
                 return self._local(item, st)
         return None
 
-    def _advance(self, st: State, now: float, *, report: bool = True) -> None:
+    def _advance(self, st: State, now: float, *, report: bool = True, announce: bool = True) -> None:
         if report:
             self.reached = self.current
             self.events.append(Event(EventKind.REACHED, self.current))
@@ -459,19 +477,41 @@ class Navigator:
                 # position_setpoint_triplet.previous: the item just reached
                 self._step.extra.update(prev_x=old.x, prev_y=old.y, prev_z=old.z)
         else:
-            self._finish()
+            self._finish(st, announce=announce)
 
-    def _finish(self) -> None:
+    def _finish(self, st: State, *, announce: bool = True) -> None:
+        """The mission ended (MissionBase ``advance_mission``: "Mission finished, landed" or
+        ", loitering"; ``setEndOfMissionItems``: landed, idle; in the air, a loiter at the current
+        position setpoint when it is a loiter item's, else at the current position, heading free).
+        ``announce`` False: the mission hands over to Return (an RTL item) and says nothing."""
+        s = self._step
         if not self.finished:
             self.finished = True
+            if announce:
+                text = "Mission finished, landed" if st.landed else "Mission finished, loitering"
+                self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, text)))
             self.events.append(Event(EventKind.FINISHED))
-        self._step.phase = Phase.DONE
+            if not st.landed:
+                loiter = self._last_position_item()
+                if loiter is not None and loiter.command in (MavCmd.NAV_LOITER_TIME, MavCmd.NAV_LOITER_UNLIM):
+                    s.x, s.y, s.z = self._local(loiter, st)
+                else:
+                    s.x, s.y, s.z, s.yaw = st.x, st.y, st.z, math.nan
+        s.phase = Phase.DONE
+
+    def _last_position_item(self) -> NavItem | None:
+        """The item that set the position setpoint last: the last one with a position up to the
+        current item (PX4's triplet keeps it through the items without a position after it)."""
+        for item in reversed(self.mission[: self.current + 1]):
+            if has_position(item):
+                return item
+        return None
 
     def _mission(self, st: State, now: float) -> Goal:
         s = self._step
         if not self.mission or s.phase == Phase.DONE or self.current >= len(self.mission):
             if self.mission and not self.finished:
-                self._finish()
+                self._finish(st)
             if st.landed:
                 return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
             if s.phase != Phase.DONE or math.isnan(s.z) or s.z == 0.0:
@@ -491,7 +531,7 @@ class Navigator:
                 # PX4 MissionBlock::issue_command: the item becomes vehicle_command
                 # NAV_RETURN_TO_LAUNCH, so commander switches to Return (mission_block.cpp)
                 self.events.append(Event(EventKind.RTL, self.current))
-                self._advance(st, now)
+                self._advance(st, now, announce=False)
                 return self._mission(st, now)
             if cmd not in (
                 MavCmd.NAV_WAYPOINT,
@@ -565,7 +605,7 @@ class Navigator:
             return self._mission(st, now)
         if s.phase == Phase.DESCEND:
             if st.landed:
-                self._finish()
+                self._finish(st)
                 return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
             return self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
         return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
