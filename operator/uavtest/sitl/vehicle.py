@@ -743,9 +743,11 @@ class Vehicle:
             elif ev.kind is EventKind.CURRENT:
                 self._out.append(STREAMS["MISSION_CURRENT"](self, t))
                 changed = True
-            elif ev.kind is EventKind.FINISHED or ev.kind is EventKind.FAILURE:
+            elif ev.kind is EventKind.FINISHED:
                 changed = True
                 self.commander.mission_finished(t)
+            elif ev.kind is EventKind.FAILURE:  # the commander's failsafe sees nav.failure
+                changed = True
             elif ev.kind is EventKind.TEXT:
                 severity, text = ev.value  # type: ignore[misc]
                 self.text(severity, text)

@@ -11,9 +11,14 @@ COM_FAIL_ACT_T <= 0.1 acts at once; a failsafe on top of one beyond Hold acts at
 
 from __future__ import annotations
 
+import math
+
+import pytest
+
 from uavtest.px4.modes import NavState, nav_state_from_custom_mode, split_custom_mode
 from uavtest.sitl.commander.failsafe import Cause, FailsafeFramework, NavAction, Selected, notify_texts
-from uavtest.sitl.mav import MavCmd, MavSeverity, Msg
+from uavtest.sitl.mav import MavCmd, MavFrame, MavSeverity, Msg
+from uavtest.sitl.mission import NavItem
 
 from .test_battery_failures import GCS, Flight
 
@@ -251,3 +256,34 @@ def test_notify_texts_are_px4s():
         (MavSeverity.EMERGENCY, "Emergency battery level, land immediately"),
         (crit, "Failsafe activated"),
     ]
+
+
+def test_a_mission_failure_holds_com_fail_act_t_then_returns():
+    """failsafe.cpp: while the user wants Mission and mission_result.failure is set (here a
+    LOITER_TIME that requires a heading, param2 1, not reached within MIS_YAW_TMT), PX4 says
+    "Mission cannot be completed" and returns, after COM_FAIL_ACT_T in Hold like any failsafe."""
+    f = Watched(MIS_YAW_TMT=0.5)
+    f.takeoff()
+    f.fly(20, until=lambda v: v.nav_state == NavState.AUTO_LOITER)
+    f.fly(3)  # settled in Hold
+    v = f.v
+    lat, lon = v.proj.reproject(v.st.x, v.st.y)
+    heading = (math.degrees(v.st.yaw) + 180.0) % 360.0  # behind it: a 4 s turn at 45 degrees/s
+    here = NavItem(0, MavCmd.NAV_LOITER_TIME, MavFrame.GLOBAL_RELATIVE_ALT_INT, param2=1.0,
+                   param4=heading, x=round(lat * 1e7), y=round(lon * 1e7), z=-v.st.z)  # fmt: skip
+    v.load_mission([here])
+    t0 = v.time_us / 1e6
+    f.command(MavCmd.DO_SET_MODE, 1, 4, 4)
+    f.fly(12, until=lambda v: v.nav_state == NavState.AUTO_RTL)
+    said = f.since(t0)
+    texts = [text for _, text in said]
+    assert "unable to reach heading within timeout" in texts
+    assert "Mission cannot be completed" in texts
+    failed = next(t for t, text in said if text == "Mission cannot be completed")
+    assert 0.4 <= failed <= 1.0  # MIS_YAW_TMT after the arrival (on the item at once)
+    modes = f.modes_since(t0)
+    hold = next(m for m in modes if m[1] == NavState.AUTO_LOITER and m[3])
+    rtl = next(m for m in modes if m[1] == NavState.AUTO_RTL)
+    assert hold[2] == NavState.AUTO_MISSION  # the user's mode is kept during the hold
+    assert rtl[0] - hold[0] == pytest.approx(5.0, abs=0.1)  # COM_FAIL_ACT_T
+    assert v.nav.failure and v.armed

@@ -123,6 +123,7 @@ class Commander:
         self._sticks_us: int | None = None
         self._offboard_lost = False  # the offboard-loss fallback is active
         self.rc_lost = False  # manual_control_signal_lost (after sticks were seen)
+        self._mission_failing = False  # failsafe_flags.mission_failure while the user wants Mission
         self._rc_lost_at_arming = True
         self.battery_warning = 0  # failsafe_flags.battery_warning: only rises while armed
         self._pos_invalid_us: int | None = None
@@ -249,6 +250,22 @@ class Commander:
             self.user_nav_state = NavState.AUTO_LOITER
             self.switch(NavState.AUTO_LOITER, t)
 
+    def _check_mission_failure(self, t: int) -> None:
+        """failsafe.cpp ``checkStateAndMode``: while the user wants Mission and the navigator
+        reports ``mission_result.failure`` (a forced heading not reached in MIS_YAW_TMT), Return,
+        through the framework (COM_FAIL_ACT_T in Hold first); ``MissionChecks`` says "Mission
+        cannot be completed". The condition clears with the failure (a new mission) or when the
+        user picks another mode."""
+        failing = self.nav.failure and self.user_nav_state == NavState.AUTO_MISSION
+        if failing == self._mission_failing:
+            return
+        self._mission_failing = failing
+        if failing:
+            self.v.text(MavSeverity.CRITICAL, "Mission cannot be completed")
+            self._framework_add("mission_failure", NavAction.RETURN, Cause.GENERIC, sticky=False)
+        else:
+            self._fw.clear("mission_failure")
+
     def _check_failsafes(self, t: int) -> None:
         """Failsafes in the air (failsafe.cpp ``checkStateAndMode``): data link, manual control,
         position (battery and failure detector: ``monitor``)."""
@@ -270,6 +287,7 @@ class Commander:
             self.rc_lost = True
             if not self._rc_loss_ignored():
                 self._failsafe(MANUAL_CONTROL_LOST, t)
+        self._check_mission_failure(t)
         if self.v.sim.faulty:
             self._check_position(t)
         self._check_geofence(t)
@@ -551,6 +569,7 @@ class Commander:
         self._gf_active = False
         self._gf_pending = None
         self._fw.reset()
+        self._mission_failing = False
         self._taken_off = False
         self._auto_disarm_landed.set_state_and_update(False, t)
         rtl_type = int(self.params["RTL_TYPE"])
