@@ -248,27 +248,32 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: the auto modes' climb-rate limits (MulticopterPositionControl's setVelocityLimits) and the
 #: landing speed's PX4 parameters (MPC_Z_VEL_MAX_DN, MPC_Z_V_AUTO_DN's cap, MPC_LAND_CRWL) (stop 23);
 #: params_and_commands again for MIS_TAKEOFF_ALT as Takeoff's default, not a minimum, and the
-#: cruise speed reset on every navigator mode's activation, as PX4 v1.15's navigator does (stop 23).
+#: cruise speed reset on every navigator mode's activation, as PX4 v1.15's navigator does (stop 23);
+#: every scenario's log header for RTL_CONE_ANG modelled (one more parameter; every logged topic and
+#: log message byte-identical, pyulog), params_and_commands' parameter list for it too, and
+#: manual_and_rtl's return as rtl_direct.cpp flies it (climb where Return started facing its
+#: heading, descent and landing turned to home's heading, "RTL: start return at N m (M m above
+#: destination)", "RTL: land at destination") (RTL cone branch).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "c6c96c45772664683306ec270172d0ca9c4ff5f2145582218ca41766799d8937",
+        "1c5ce169e0823b93eac6db3f89b63dd06f16cea825ffcbd8472579f76e50a423",
         "6541fa83c5b91046b135b686b09a32272006b1a5ea7bd3a8d51a2e427671f217",
     ),
     "manual_and_rtl": (
-        "92130f9511744f8ef22e90233b49a2681284840bbc11c7e88273cee8bd7f9f80",
-        "35ef12836d7da20d01e07698317f07b741d9ce5ebb808ae0f01d2990a9debcc4",
+        "47e2c24c9ab8c1ac7e8fc3c4d62d0ed7f7da8b9eaed7bb30de3948fcd9db43ce",
+        "37e79bf79e013250b493a2dd853d5a960986052209ae8efd769d24515448618b",
     ),
     "datalink_loss": (
-        "0abfc6dfae481f61e4f4ad6a7b5cc5285edbd8c0d70c30bb632d7384d71607bc",
+        "455fecc5dc9ed85621d1b905789d019cbdd4ae1f76b1e9e5e397cce35d591396",
         "b864d0b94d63c2fab5ad69d384b605318fc4e16f14777ab972a9a97537fb6bdc",
     ),
     "crash": (
-        "d1dd9881d342faa95513677ef1fd9039b9090b3d392ebe3e2d01397e1b862bc9",
+        "353f7cb62f1edb6153bd492f6f6366bf836f4c432dc44694e168f3f3863f597e",
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "4b5e47f540117a3682b9e95013a5eb470defa82700d70ee1854e7b2992558cbd",
-        "c38fa5f18b8e3ebeb9f1177f0edd00cb4cd5372b3a2111b4c0d11e8c61259c50",
+        "23bb93b48dcd4cf6f2de4271ec20b39993eeaef6640b459c670dd2b6ab8106e3",
+        "2d28c4d300e2c110f32c83ddc295ce63f40e805401ec59b6d163c9f27f70a414",
     ),
 }
 
