@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import pytest
@@ -73,14 +74,17 @@ def test_geofence_return_comes_back_from_the_fence(repo_root: Path, tmp_path: Pa
         assert r["metrics"]["geofence_violation"] == 0.0 and r["metrics"]["mission_completed"] is False
         assert 14.0 < r["metrics"]["max_altitude"] < 16.5  # RTL_RETURN_ALT 15
     for replica in sorted(tmp_path.rglob("replica-*")):
-        texts = [m.message for m in ULog(str(replica / "flight.ulg")).logged_messages]
+        log = ULog(str(replica / "flight.ulg"))
+        texts = [m.message for m in log.logged_messages]
+        # rtl_direct.cpp: the return altitude AMSL (home's float32 altitude + 15, ceilf), then above home
+        home_amsl = float(log.get_dataset("home_position").data["alt"][-1])
         breach = texts.index("Geofence violation: exceeding maximum distance to Home")
         assert texts[breach + 1 : breach + 4] == [
             "Failsafe activated: entering Hold for 5 seconds",
             "Failsafe activated",
-            "RTL: start return at 15 m",
+            f"RTL: start return at {math.ceil(home_amsl + 15)} m (15 m above destination)",
         ]
-        assert texts[-2:] == ["Landing detected", "Disarmed by landing"]
+        assert texts[-3:] == ["RTL: land at destination", "Landing detected", "Disarmed by landing"]
         rows = list(csv.DictReader((replica / "trajectory.csv").open()))
         assert 50.0 < max(float(row["x"]) for row in rows) < 60.0  # crossed the fence, then braked
         assert abs(float(rows[-1]["x"])) < 2.5 and abs(float(rows[-1]["y"])) < 2.5  # home

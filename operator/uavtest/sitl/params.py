@@ -75,6 +75,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "RTL_LAND_DELAY": (FLOAT, 0.0),
     "RTL_MIN_DIST": (FLOAT, 10.0),
     "RTL_TYPE": (INT, 0),
+    "RTL_CONE_ANG": (INT, 45),
     # geofence
     "GF_ACTION": (INT, 2),
     "GF_MAX_HOR_DIST": (FLOAT, 0.0),

@@ -256,26 +256,32 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: finished for a mission armed on the ground: handleAutoDisarm's hysteresis), and the RC and data
 #: link failsafes held COM_FAIL_ACT_T in Hold first, with PX4's texts (failsafe framework).
 #: stop 24, both together: the failsafe's Hold (COM_FAIL_ACT_T) now holds at the braking stop.
+#: every scenario's log header for RTL_CONE_ANG modelled (one more parameter; every logged topic and
+#: log message byte-identical, pyulog), params_and_commands' parameter list for it too, and
+#: manual_and_rtl's return as rtl_direct.cpp flies it (climb where Return started facing its
+#: heading, descent and landing turned to home's heading, "RTL: start return at N m (M m above
+#: destination)", "RTL: land at destination") (RTL cone branch).
+#: stop 24, all three together: the commander gives the navigator home's heading (home_position.yaw).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "1bdf7e16f1548b8f3d06941ec8527ffea228f7f7b5023e591ddb6ee59b061475",
+        "18491d4abdf485bfa0a69284d14fe10f80b83f0e14d344843500628a2060e507",
         "4e7ae539fb78eddda2d976225bf4a5f76cb0d6d147531259101e910e57322f6f",
     ),
     "manual_and_rtl": (
-        "4e61a10cd52866529be26abd602c1eabc233a88d81aa732b23aab6be11d50d1d",
-        "9a7ba4d7c950308fda8f3ad318c28a3ea4b0f7ba8016b7ad66c6e7b4260fa83d",
+        "a64d203be6d3634f1a73ccc7ca887e9ed15b7a189175699ab23f7688cb22598e",
+        "1fcd29f38c8b3aa4ef97108e09e3c0313a9cca6715965b261d3633661fab4e63",
     ),
     "datalink_loss": (
-        "0ba53781c3527d968f4a69e17207520fc4e0ba84fcbafda6b25a431036cd42c3",
+        "718d1d8dcbd824f79e8924264c6769d2d530176694f0d73f97e41b07afa37faa",
         "c4a06a38305a54cb3c7b5ed58856c49a69b6902f6bbbc0e0b246832b4e06e7e6",
     ),
     "crash": (
-        "5ae9edf2fd218727c0b42f2448cbfb65b78714fb8ba294d63577227f58a349e3",
+        "6a4d5883e41fb51c58ce7ded49c003352e80f73a8d17a6666bb95e16f5017bba",
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "be2acbee62d8413d1f9625bcade18fe1f58b37a0d86de89fd9cd0017c46ab6a7",
-        "cf6d0c3428e2103bf37833516e0df54a6306ac643832cd57e038025987c09cd9",
+        "63aadd992e832d586f7bb154355211d4d87c7952dd177e78ac816a282210f54c",
+        "c63cfe6782e4ae005d0734cbf5757c5d4d5ea8be13577347ce00590e3552af46",
     ),
 }
 

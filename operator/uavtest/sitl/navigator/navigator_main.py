@@ -28,8 +28,14 @@ queues events (mission item reached, mission finished, status texts). PX4 behavi
 - a mission RTL item is issued as vehicle_command NAV_RETURN_TO_LAUNCH (commander → Return);
 - DO_REPOSITION moves the hold point (``reposition``); ORBIT runs ``FlightTaskOrbit``;
 - a new mission or MISSION_SET_CURRENT only changes what is flown in mission mode;
-- return: climb to ``RTL_RETURN_ALT`` (unless within ``RTL_MIN_DIST``), fly home, descend to
-  ``RTL_DESCEND_ALT``, wait ``RTL_LAND_DELAY`` (negative: forever), land;
+- return (``rtl_direct.cpp``): climb where Return started, facing the heading it had, to the
+  return altitude (``rtl.py``: ``RTL_RETURN_ALT``, lowered near the destination by the
+  ``RTL_CONE_ANG`` cone within ``RTL_MIN_DIST``; "RTL: start return at N m (M m above
+  destination)"), fly to the destination (facing it, or already home's heading when the return
+  starts within ``RTL_MIN_DIST``), descend to ``RTL_DESCEND_ALT`` turning to home's heading (the
+  heading home was set with), wait ``RTL_LAND_DELAY`` (negative: forever, "RTL: completed,
+  loitering"), land facing home's heading ("RTL: land at destination"); every item with a heading
+  waits for it within ``MIS_YAW_ERR``;
 - return destination (``RTL_TYPE`` 0, ``rtl.cpp`` findRtlDestination): home or the closest rally
   point (``geofence.rally_destination``); RTL_TYPE 1-3 are not modelled (said at arming) and
   fly as 0;
@@ -53,6 +59,13 @@ from uavtest.sitl.mav import MavCmd, MavSeverity
 from uavtest.sitl.mc_pos_control import NO_NEXT, NO_TRACK, Goal, GoalKind, wrap_pi
 from uavtest.sitl.mission import NavItem, has_position
 from uavtest.sitl.navigator.geofence import NAV_RALLY_POINT, Geofence, rally_destination
+from uavtest.sitl.navigator.rtl import (
+    f32,
+    rtl_heading_accepted,
+    rtl_loiters_forever,
+    rtl_return_altitude,
+    rtl_start_text,
+)
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.uorb import GeofenceResult
 
@@ -110,11 +123,18 @@ class Phase(Enum):
 
 @dataclass(slots=True)
 class _Rtl:
+    """RtlDirect's state: climb (CLIMBING), return (MOVE_TO_LOITER), descend (LOITER_DOWN), loiter
+    (LOITER_HOLD), approach (MOVE_TO_LAND_HOVER), land (LAND), done (IDLE)."""
+
     phase: str = "climb"
-    alt: float = 0.0
+    alt: float = 0.0  # the return altitude, m up (local frame, -z)
     since: float = 0.0
     x: float = 0.0  # destination: home or a rally point
     y: float = 0.0
+    land_alt: float = 0.0  # the loiter altitude: RTL_DESCEND_ALT above the destination, m up
+    yaw: float = math.nan  # the current item's heading (nan: FlightTaskAuto's MPC_YAW_MODE)
+    cx: float = 0.0  # the climb's position: where Return started
+    cy: float = 0.0
 
 
 @dataclass(slots=True)
@@ -357,6 +377,10 @@ class Navigator:
             self._climb_z = self._climb_required(st)
         elif nav_state == NavState.ORBIT:
             self.orbit.activate(st.x, st.y, st.z, st.yaw)
+        if math.isnan(self.home_yaw):
+            # home came without its heading: the commander sets home and then starts the mode in
+            # the same step (arming), so the state seen here is the one home was set from
+            self.home_yaw = st.yaw
 
     def breaking_stop(self, st: State) -> tuple[float, float]:
         """Navigator::calculate_breaking_stop: where a multicopter flying at its current
@@ -689,45 +713,110 @@ class Navigator:
 
     # ------------------------------------------------------------------ return to launch
 
+    @property
+    def home(self) -> tuple[float, float, float]:
+        """home_position's local x, y, z."""
+        return self._home
+
+    @home.setter
+    def home(self, value: tuple[float, ...]) -> None:
+        """Set home: x, y, z and optionally its heading (home_position.yaw: the heading when home
+        was set, ``HomePosition::fillLocalHomePos``); without one it is taken from the state the
+        next mode starts with (``enter``)."""
+        self._home = (value[0], value[1], value[2])
+        self.home_yaw = value[3] if len(value) > 3 else math.nan
+
     def _rtl_start(self, st: State, now: float) -> _Rtl:
+        """RTL::on_activation (RTL_TYPE 0): the destination, the return altitude and its text, and
+        RtlDirect::getActivationLandState: climb when below the return altitude, else return."""
         p = self.params
-        hx, hy, _ = self.home
+        hx, hy, hz = self.home
         if self.rally:  # RTL_TYPE 0: the closest of home and the rally points
             dest = rally_destination(self.rally, (st.x, st.y), (hx, hy))
             if dest is not None:
                 hx, hy = dest[0], dest[1]
-        far = math.hypot(st.x - hx, st.y - hy) > p["RTL_MIN_DIST"]
-        alt = max(-st.z, p["RTL_RETURN_ALT"]) if far else -st.z
-        self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, f"RTL: start return at {round(alt)} m")))
-        return _Rtl(phase="climb", alt=alt, since=now, x=hx, y=hy)
+        # PX4 keeps the altitudes AMSL in float32 (home_position.alt, vehicle_global_position.alt)
+        dest_amsl = f32(self.home_alt - hz)
+        alt_amsl = f32(self.home_alt - st.z)
+        rtl_amsl = f32(
+            rtl_return_altitude(
+                math.hypot(st.x - hx, st.y - hy),
+                dest_amsl,
+                alt_amsl,
+                return_alt=p["RTL_RETURN_ALT"],
+                cone_half_angle_deg=int(p["RTL_CONE_ANG"]),
+                min_dist=p["RTL_MIN_DIST"],
+                acc_rad=p["NAV_ACC_RAD"],
+            )
+        )
+        self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, rtl_start_text(rtl_amsl, dest_amsl))))
+        alt = rtl_amsl - self.home_alt
+        # RtlDirect::sanitizeLandApproach: RTL_DESCEND_ALT above the destination, not above the
+        # return altitude (set_rtl_item's loiter_altitude)
+        land_alt = min(dest_amsl - self.home_alt + p["RTL_DESCEND_ALT"], alt)
+        # CLIMBING: a loiter-to-altitude where Return started, facing the heading it had then
+        r = _Rtl("climb", alt, now, hx, hy, land_alt=land_alt, yaw=st.yaw, cx=st.x, cy=st.y)
+        if st.landed:
+            r.phase = "done"  # for safety, no Return from the ground (IDLE)
+        elif not alt_amsl < rtl_amsl:
+            self._rtl_return(r, st)
+        return r
+
+    def _rtl_return(self, r: _Rtl, st: State) -> None:
+        """RtlDirect::set_rtl_item MOVE_TO_LOITER: to the destination at the return altitude; the
+        heading is left to FlightTaskAuto (MPC_YAW_MODE: facing the destination), or is already
+        the destination's (home's) when the return starts within RTL_MIN_DIST of it."""
+        close = math.hypot(st.x - r.x, st.y - r.y) < self.params["RTL_MIN_DIST"]
+        r.phase = "return"
+        r.yaw = self.home_yaw if close else math.nan
+
+    def _rtl_heading(self, r: _Rtl, st: State) -> bool:
+        """The current RTL item's heading is reached (rtl.py ``rtl_heading_accepted``)."""
+        p = self.params
+        return rtl_heading_accepted(r.yaw, st.yaw, p["MIS_YAW_ERR"], p["MIS_YAW_TMT"], self.yaw_acceptance)
 
     def _rtl(self, r: _Rtl, st: State, now: float) -> Goal:
+        """RtlDirect::on_active: each item flown until is_mission_item_reached_or_completed, then
+        set_rtl_item's next one."""
         p = self.params
         hx, hy = r.x, r.y
+        alt_rad = p["NAV_MC_ALT_RAD"]
         if r.phase == "climb":
             if st.landed:
                 r.phase = "done"
-            elif -st.z < r.alt - p["NAV_MC_ALT_RAD"]:
-                return self._goal_set(GoalKind.POSITION, st.x, st.y, -r.alt, st.yaw)
+            elif -st.z < r.alt - alt_rad or not self._rtl_heading(r, st):
+                return self._goal_set(GoalKind.POSITION, r.cx, r.cy, -r.alt, r.yaw)
             else:
-                r.phase = "return"
+                self._rtl_return(r, st)
         if r.phase == "return":
-            if math.hypot(st.x - hx, st.y - hy) > p["NAV_ACC_RAD"]:
-                return self._goal_set(GoalKind.POSITION, hx, hy, -r.alt)
-            r.phase = "descend"
+            far = math.hypot(st.x - hx, st.y - hy) > p["NAV_ACC_RAD"]
+            if far or abs(-st.z - r.alt) > alt_rad or not self._rtl_heading(r, st):
+                return self._goal_set(GoalKind.POSITION, hx, hy, -r.alt, r.yaw)
+            # LOITER_DOWN: down to the loiter altitude, turning to the destination's heading
+            r.phase, r.yaw = "descend", self.home_yaw
         if r.phase == "descend":
-            alt = min(r.alt, p["RTL_DESCEND_ALT"])
-            if -st.z > alt + p["NAV_MC_ALT_RAD"]:
-                return self._goal_set(GoalKind.POSITION, hx, hy, -alt, st.yaw)
-            r.phase, r.since = "loiter", now
+            if abs(-st.z - r.land_alt) > alt_rad or not self._rtl_heading(r, st):
+                return self._goal_set(GoalKind.POSITION, hx, hy, -r.land_alt, r.yaw)
+            # LOITER_HOLD: RTL_LAND_DELAY there (negative: for ever); setLoiterHoldMissionItem
+            # leaves the heading to FlightTaskAuto, which holds it within the acceptance radius
+            r.phase, r.since, r.yaw = "loiter", now, math.nan
+            if rtl_loiters_forever(p["RTL_LAND_DELAY"]):
+                self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, "RTL: completed, loitering")))
         if r.phase == "loiter":
             delay = p["RTL_LAND_DELAY"]
-            if delay < 0 or now - r.since < delay:
-                return self._goal_set(GoalKind.POSITION, hx, hy, st.z, st.yaw)
+            if rtl_loiters_forever(delay) or now - r.since < delay:
+                return self._goal_set(GoalKind.POSITION, hx, hy, -r.land_alt)
+            # MOVE_TO_LAND_HOVER: over the destination, facing its heading
+            r.phase, r.yaw = "approach", self.home_yaw
+        if r.phase == "approach":
+            far = math.hypot(st.x - hx, st.y - hy) > p["NAV_ACC_RAD"]
+            if far or abs(-st.z - r.land_alt) > alt_rad or not self._rtl_heading(r, st):
+                return self._goal_set(GoalKind.POSITION, hx, hy, -r.land_alt, r.yaw)
             r.phase = "land"
+            self.events.append(Event(EventKind.TEXT, (MavSeverity.INFO, "RTL: land at destination")))
         if r.phase == "land":
             if st.landed:
                 r.phase = "done"
             else:
-                return self._goal_set(GoalKind.LAND, hx, hy, st.z, st.yaw)
+                return self._goal_set(GoalKind.LAND, hx, hy, st.z, r.yaw)
         return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
