@@ -60,6 +60,7 @@ from uavtest.sitl.mc_pos_control import NO_NEXT, NO_TRACK, Goal, GoalKind, wrap_
 from uavtest.sitl.mission import NavItem, has_position
 from uavtest.sitl.navigator.geofence import NAV_RALLY_POINT, Geofence, rally_destination
 from uavtest.sitl.navigator.rtl import (
+    FLT_EPSILON,
     f32,
     rtl_heading_accepted,
     rtl_loiters_forever,
@@ -79,7 +80,6 @@ _PASS_THROUGH = frozenset({MavCmd.NAV_WAYPOINT, MavCmd.NAV_TAKEOFF})
 _HEADING_ITEMS = frozenset({MavCmd.NAV_WAYPOINT, MavCmd.NAV_LOITER_TIME, MavCmd.NAV_LOITER_UNLIM})
 #: items whose setpoint is SETPOINT_TYPE_LOITER (MissionBlock::mission_item_to_position_setpoint)
 _LOITER_ITEMS = frozenset({MavCmd.NAV_LOITER_TIME, MavCmd.NAV_LOITER_UNLIM})
-FLT_EPSILON = 1.1920929e-07
 
 
 class EventKind(Enum):
@@ -685,22 +685,17 @@ class Navigator:
         return 0.0
 
     def _heading_reached(self, st: State, now: float) -> bool:
-        """is_mission_item_reached_or_completed's heading for a multicopter: none to accept
-        (NaN, or obstacle avoidance's NaN yaw_acceptance: get_yaw_to_be_accepted) is reached;
-        else within MIS_YAW_ERR, or at once when MIS_YAW_TMT is set and the heading not forced.
-        A forced heading not reached MIS_YAW_TMT after the arrival fails the mission."""
-        s = self._step
-        if not self.yaw_acceptance or not math.isfinite(s.yaw):
-            return True
-        p = self.params
+        """is_mission_item_reached_or_completed's heading for a multicopter
+        (``rtl_heading_accepted``, the item's ``force_heading``); a forced heading not reached
+        MIS_YAW_TMT after the arrival fails the mission."""
+        s, p = self._step, self.params
         timeout = p["MIS_YAW_TMT"]
-        if abs(wrap_pi(s.yaw - st.yaw)) < math.radians(p["MIS_YAW_ERR"]):
+        if rtl_heading_accepted(
+            s.yaw, st.yaw, p["MIS_YAW_ERR"], timeout, self.yaw_acceptance, forced=s.force_heading
+        ):
             return True
-        if timeout >= FLT_EPSILON:
-            if not s.force_heading:
-                return True
-            if now - s.reached_at >= timeout:
-                self._mission_failure_heading_timeout()
+        if s.force_heading and timeout >= FLT_EPSILON and now - s.reached_at >= timeout:
+            self._mission_failure_heading_timeout()
         return False
 
     def _mission_failure_heading_timeout(self) -> None:

@@ -23,7 +23,14 @@ import struct
 
 from uavtest.sitl.mc_pos_control import wrap_pi
 
-__all__ = ["f32", "rtl_heading_accepted", "rtl_loiters_forever", "rtl_return_altitude", "rtl_start_text"]
+__all__ = [
+    "FLT_EPSILON",
+    "f32",
+    "rtl_heading_accepted",
+    "rtl_loiters_forever",
+    "rtl_return_altitude",
+    "rtl_start_text",
+]
 
 FLT_EPSILON = 1.1920929e-07
 
@@ -76,12 +83,19 @@ def rtl_loiters_forever(land_delay: float) -> bool:
 
 
 def rtl_heading_accepted(
-    yaw_sp: float, heading: float, yaw_err_deg: float, yaw_timeout: float, yaw_acceptance: bool = True
+    yaw_sp: float,
+    heading: float,
+    yaw_err_deg: float,
+    yaw_timeout: float,
+    yaw_acceptance: bool = True,
+    *,
+    forced: bool = False,
 ) -> bool:
-    """``MissionBlock::is_mission_item_reached_or_completed``'s heading for an RTL item of a
-    multicopter (never ``force_heading`` without land approaches): none to wait for (NaN, or
-    obstacle avoidance's NaN yaw_acceptance: ``Navigator::get_yaw_to_be_accepted``), within
-    ``MIS_YAW_ERR``, or ``MIS_YAW_TMT`` set, which accepts an unforced heading at once."""
+    """``MissionBlock::is_mission_item_reached_or_completed``'s heading for a multicopter, an RTL
+    item's (never ``force_heading`` without land approaches) as a mission item's: none to wait
+    for (NaN, or obstacle avoidance's NaN yaw_acceptance: ``Navigator::get_yaw_to_be_accepted``),
+    within ``MIS_YAW_ERR``, or ``MIS_YAW_TMT`` set, which accepts an unforced heading at once."""
     if not yaw_acceptance or not math.isfinite(yaw_sp):
         return True
-    return abs(wrap_pi(yaw_sp - heading)) < math.radians(yaw_err_deg) or yaw_timeout >= FLT_EPSILON
+    within = abs(wrap_pi(yaw_sp - heading)) < math.radians(yaw_err_deg)
+    return within or (yaw_timeout >= FLT_EPSILON and not forced)
