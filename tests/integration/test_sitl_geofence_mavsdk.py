@@ -94,7 +94,8 @@ def test_mavsdk_fence_rally_and_return(sitl_port: int):
         eventually(lambda: telemetry.flight_mode() == FlightMode.POSCTL, 10, "position mode")
         sticks[0] = 0.6  # North, across the fence at 30 m
         eventually(lambda: telemetry.flight_mode() == FlightMode.HOLD, 30, "the breach hold")
-        sticks[0] = 0.0
+        # the stick stays where it is: moved once the Return has begun, it would take over
+        # (COM_RC_OVERRIDE), in PX4 too
         eventually(lambda: telemetry.flight_mode() == FlightMode.RETURN_TO_LAUNCH, 10, "return")
         eventually(lambda: not telemetry.armed(), 90, "landing")
     finally:

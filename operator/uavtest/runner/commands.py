@@ -114,6 +114,11 @@ SETPOINT_PERIOD_MS = 50
 #: ``mode offboard`` waits until setpoints have streamed this long (PX4 wants them before the switch)
 OFFBOARD_WARMUP_MS = 500
 NEUTRAL_STICKS = ManualControl(x=0, y=0, z=500, r=0)  # centred sticks, hover throttle
+#: a step into an auto mode with the sticks off centre centres them this long first: PX4 takes a
+#: stick *moving* (COM_RC_STICK_OV, 30 % of its travel per second, low-passed over 0.1 s) in an
+#: auto mode as the pilot taking over (COM_RC_OVERRIDE), so letting go after the switch would
+#: undo it; full stick to centre has settled under that rate within 0.5 s of 20 Hz samples
+STICK_SETTLE_MS = 600
 LATE_MS = 1000  # a command that runs later than this after its time shifts the rest of the schedule
 SCHEDULE_SHIFTED = (
     "the command schedule was shifted: a command ran more than 1 s late because the vehicle was not "
@@ -450,6 +455,7 @@ class CommandScheduler:
         self.sent: list[tuple[int, str]] = []  # (vehicle ms, label) of every step started
         self.sticks: ManualControl | None = None
         self._last_stick_ms = -math.inf
+        self._sticks_centred_ms: int | None = None  # vehicle time the runner centred them
         self.setpoint: PositionTargetLocal | PositionTargetGlobal | None = None  # being streamed
         self._last_setpoint_ms = -math.inf
         self._setpoint_since_ms: int | None = None  # vehicle time the stream started
@@ -572,8 +578,28 @@ class CommandScheduler:
         return out
 
     def _warming_up(self, step: Step, now_ms: int) -> bool:
-        """A mode offboard waits until setpoints have streamed ``offboard_warmup_ms``."""
+        """A mode offboard waits until setpoints have streamed ``offboard_warmup_ms``; a step into
+        an auto mode while the sticks are off centre centres them and waits ``STICK_SETTLE_MS``
+        (a ground station's joystick let go before the switch, not after it)."""
         self._hold_until_ms = None
+        mode_auto = step.kind is StepKind.MODE and step.mode in AUTO_MODES
+        enters_auto = mode_auto or step.kind in _LEAVES_OFFBOARD
+        if enters_auto and self.sticks is not None:
+            if self.sticks != NEUTRAL_STICKS:
+                log.info(
+                    "t=%.2f s: sticks centred %d ms before %s (moving sticks take an auto mode over: "
+                    "COM_RC_OVERRIDE)",
+                    now_ms / 1000,
+                    STICK_SETTLE_MS,
+                    step.label,
+                )
+                self.sticks = NEUTRAL_STICKS
+                self._last_stick_ms = -math.inf
+                self._sticks_centred_ms = now_ms
+            if self._sticks_centred_ms is not None and now_ms < self._sticks_centred_ms + STICK_SETTLE_MS:
+                self._hold_until_ms = self._sticks_centred_ms + STICK_SETTLE_MS
+                return True
+            return False
         if step.kind is not StepKind.MODE or step.mode is not FlightMode.OFFBOARD:
             return False
         if self._setpoint_since_ms is None:
@@ -623,6 +649,7 @@ class CommandScheduler:
         if step.kind is StepKind.STICKS:
             self.sticks = step.sticks
             self._last_stick_ms = -math.inf
+            self._sticks_centred_ms = None
             return []
         if step.kind is StepKind.SETPOINT:
             if self.setpoint is None:

@@ -37,6 +37,8 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "COM_FAIL_ACT_T": (FLOAT, 5.0),
     "COM_RC_IN_MODE": (INT, 1),
     "COM_RCL_EXCEPT": (INT, 0),
+    "COM_RC_OVERRIDE": (INT, 1),
+    "COM_RC_STICK_OV": (FLOAT, 30.0),
     "COM_LOW_BAT_ACT": (INT, 2),
     "COM_POS_FS_DELAY": (INT, 1),
     "COM_POSCTL_NAVL": (INT, 0),

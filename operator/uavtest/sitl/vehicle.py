@@ -42,6 +42,7 @@ from uavtest.sitl.ekf2 import Estimator
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.land_detector import LandDetector
 from uavtest.sitl.local_planner import LocalPlanner, PlannerParams
+from uavtest.sitl.manual_control import StickMovement
 from uavtest.sitl.mav import LandedState, MavSeverity, Msg, ParamType
 from uavtest.sitl.mavlink_io import custom_mode_name
 from uavtest.sitl.mavlink_streams import ORBIT_STATUS_HZ, STREAMS, SW_VERSION, orbit_execution_status
@@ -232,6 +233,7 @@ class Vehicle:
         self.st = State()
         self.offboard = Offboard(self)
         self.commander = Commander(self)
+        self.stick_movement = StickMovement()  # PX4's ManualControl: sticks_moving
         self.recorder.start(0, self.params)
         self._setup_collision_prevention()
         self._estimate()
@@ -411,8 +413,12 @@ class Vehicle:
         y = max(-1.0, min(1.0, float(msg.get("y", 0)) / 1000.0))
         z = max(0.0, min(1.0, float(msg.get("z", 500)) / 1000.0))
         r = max(-1.0, min(1.0, float(msg.get("r", 0)) / 1000.0))
-        moving = (x, y, z, r) != self.commander.sticks
-        self.commander.manual_control(t, (x, y, z, r))
+        # manual_control_setpoint: roll y, pitch x, yaw r, throttle 2 z - 1, each in [-1, 1]
+        p = self.params
+        moving = self.stick_movement.update(
+            t, (y, x, r, z * 2.0 - 1.0), p["COM_RC_STICK_OV"], max(p["COM_RC_LOSS_T"], 0.1)
+        )
+        self.commander.manual_control(t, (x, y, z, r), moving)
         self.recorder.data(
             topics.ManualControlSetpoint(
                 t, t, True, 2, y, x, r, z * 2.0 - 1.0, 0.0, 0.0, 0.0, moving, int(msg.get("buttons", 0))

@@ -7,6 +7,7 @@ import itertools
 import pytest
 
 from uavtest.runner.commands import (
+    STICK_SETTLE_MS,
     CommandScheduler,
     Refusal,
     arm_command,
@@ -163,8 +164,10 @@ def test_every_refusal_of_a_mode_is_recorded_not_an_error(result: AckResult) -> 
 
 
 def test_sticks_stream_at_20_hz_of_vehicle_time_and_centre_in_an_auto_mode() -> None:
-    """After a switch to an auto mode the sticks keep coming, centred (a joystick on a ground
-    station keeps sending: stopping them would be an RC loss to PX4); a disarm ends them."""
+    """Before a switch to an auto mode the sticks are centred and given STICK_SETTLE_MS to settle
+    (PX4 takes sticks moving in an auto mode as the pilot taking over, COM_RC_OVERRIDE); they keep
+    coming, centred (a joystick on a ground station keeps sending: stopping them would be an RC
+    loss to PX4); a disarm ends them."""
     s = CommandScheduler(
         [
             cmd(1.0, "sticks", sticks=Sticks(x=0.5, y=-1, z=0.5, r=0)),
@@ -173,18 +176,21 @@ def test_sticks_stream_at_20_hz_of_vehicle_time_and_centre_in_an_auto_mode() -> 
         ]
     )
     sent: list[tuple[int, ManualControl]] = []
+    mode_sent: list[int] = []
     for t in range(0, 6000, 10):  # telemetry every 10 ms of vehicle time
         for msg in s.update(t, t / 1000, armed=True):
             if isinstance(msg, ManualControl):
                 sent.append((t, msg))
             elif msg == mode_command(FlightMode.LAND):
+                mode_sent.append(t)
                 s.handle_ack(CommandAck(MODE, AckResult.ACCEPTED), t, t / 1000)
             elif isinstance(msg, CommandLong) and msg.command == ARM:
                 s.handle_ack(CommandAck(ARM, AckResult.ACCEPTED), t, t / 1000)
     times = [t for t, _ in sent]
     assert times[0] == 1000 and all(b - a == 50 for a, b in itertools.pairwise(times))
-    assert all(m == ManualControl(500, -1000, 500, 0) for t, m in sent if t <= 3000)
-    assert all(m == ManualControl(0, 0, 500, 0) for t, m in sent if t > 3000)
+    assert all(m == ManualControl(500, -1000, 500, 0) for t, m in sent if t < 3000)
+    assert all(m == ManualControl(0, 0, 500, 0) for t, m in sent if t >= 3000)
+    assert mode_sent == [3000 + STICK_SETTLE_MS]  # once the centred sticks have settled
     assert times[-1] < 5000, "a disarm ends them"
 
 

@@ -262,26 +262,30 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: heading, descent and landing turned to home's heading, "RTL: start return at N m (M m above
 #: destination)", "RTL: land at destination") (RTL cone branch).
 #: stop 24, all three together: the commander gives the navigator home's heading (home_position.yaw).
+#: stop 25: COM_RC_OVERRIDE and COM_RC_STICK_OV modelled (two more parameters in every header and in
+#: params_and_commands' parameter list) and manual_control_setpoint.sticks_moving as PX4's
+#: ManualControl computes it (a low-passed stick rate above COM_RC_STICK_OV, manual_and_rtl); every
+#: other logged field and every log message byte-identical (pyulog), no flight changed.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "18491d4abdf485bfa0a69284d14fe10f80b83f0e14d344843500628a2060e507",
+        "b019003382195cd7d592b5c33b80bbbb586320ccf08e844f7b753eb37a43c22c",
         "4e7ae539fb78eddda2d976225bf4a5f76cb0d6d147531259101e910e57322f6f",
     ),
     "manual_and_rtl": (
-        "a64d203be6d3634f1a73ccc7ca887e9ed15b7a189175699ab23f7688cb22598e",
+        "ac7eef730417b90834230ab1bff2c1ae607334c313117eb3e06f751bd15c91e0",
         "1fcd29f38c8b3aa4ef97108e09e3c0313a9cca6715965b261d3633661fab4e63",
     ),
     "datalink_loss": (
-        "718d1d8dcbd824f79e8924264c6769d2d530176694f0d73f97e41b07afa37faa",
+        "0652dd9bf9a567dfb09c0c30feaa9cc4097e243d3e332972ff47f16c1d551784",
         "c4a06a38305a54cb3c7b5ed58856c49a69b6902f6bbbc0e0b246832b4e06e7e6",
     ),
     "crash": (
-        "6a4d5883e41fb51c58ce7ded49c003352e80f73a8d17a6666bb95e16f5017bba",
+        "c917fa62cafc540c85e80823dfb0d88fb8bbdd159af9c1dc9507c313c4bf31e0",
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "63aadd992e832d586f7bb154355211d4d87c7952dd177e78ac816a282210f54c",
-        "c63cfe6782e4ae005d0734cbf5757c5d4d5ea8be13577347ce00590e3552af46",
+        "62fa5ead5d8e3d92bab758a5bbd3b8698d653050535a6a1a8058fb474b974b75",
+        "65e4a1e1366c9793ab767b6862398dec7df46c97d8b9efb47755ce5ad6009cee",
     ),
 }
 

@@ -287,6 +287,7 @@ def test_rtl_type_0_returns_to_the_closest_rally_point():
     points = [(60, 0), (-60, 0), (5, 0)]  # the 5 m one is within 10 m of home: ignored
     upload(v, [item(v, i, NAV_RALLY_POINT, x, y, mtype=RALLY) for i, (x, y) in enumerate(points)], RALLY)
     take_off_then_sticks(v, lambda v: v.body.x > 35)
+    fly(v, lambda v: False, 0.5)  # sticks centred first: moved in Return, they would take over
     assert command(v, MavCmd.NAV_RETURN_TO_LAUNCH) == MavResult.ACCEPTED
     fly(v, lambda v: not v.armed, 150)
     assert not v.armed and math.hypot(v.body.x - 60, v.body.y) < 2.5
@@ -300,6 +301,7 @@ def test_rtl_goes_home_when_home_is_closer_and_unmodelled_rtl_type_is_said():
     command(v, MavCmd.COMPONENT_ARM_DISARM, 0, 21196)
     v.fly_until(lambda v: v.body.on_ground, 10_000_000)
     take_off_then_sticks(v, lambda v: v.body.x > 20)
+    fly(v, lambda v: False, 0.5)  # sticks centred first (COM_RC_OVERRIDE)
     command(v, MavCmd.NAV_RETURN_TO_LAUNCH)
     fly(v, lambda v: not v.armed, 150)
     assert math.hypot(v.body.x, v.body.y) < 2.5  # home (20 m) is closer than the rally point (40 m)

@@ -133,6 +133,10 @@ class Commander:
         self.status_dirty = True  # vehicle_status changed: log it now, not at the next 1 Hz slot
         self._gf_active = False  # a geofence breach has been acted on (until it clears)
         self._gf_pending: tuple[NavState, int] | None = None  # GF action after COM_FAIL_ACT_T hold
+        #: the nav state the geofence action flies (until the user picks a mode), and whether
+        #: sticks may take it over (fromGfActParam: only Return / Land after their delay)
+        self._gf_flying: NavState | None = None
+        self._gf_sticks = False
         #: data link, manual control, battery and motor failsafes (FailsafeBase: COM_FAIL_ACT_T)
         self._fw = FailsafeFramework(self.params["COM_FAIL_ACT_T"])
         self._taken_off = False  # _have_taken_off_since_arming
@@ -153,7 +157,9 @@ class Commander:
             self.v.text(MavSeverity.INFO, "Data link regained")
             self._fw.clear(DATA_LINK_LOST.action_param)
 
-    def manual_control(self, t: int, sticks: tuple[float, float, float, float]) -> None:
+    def manual_control(self, t: int, sticks: tuple[float, float, float, float], moving: bool = False) -> None:
+        """A MANUAL_CONTROL sample (x, y, z, r scaled to [-1, 1] / [0, 1]); ``moving``: the
+        ManualControl module's ``sticks_moving`` (``manual_control.StickMovement``)."""
         if int(self.params["COM_RC_IN_MODE"]) in (0, RC_IN_MODE_DISABLED):
             return  # 0: RC transmitter only (MAVLink sticks unused); 4: stick input disabled
         self.sticks = sticks
@@ -163,6 +169,49 @@ class Commander:
             self.rc_lost = False
             self.v.text(MavSeverity.INFO, "Manual control regained")
             self._fw.clear(MANUAL_CONTROL_LOST.action_param)
+        if moving:
+            self._stick_override(t)
+
+    def _stick_override(self, t: int) -> None:
+        """Commander.cpp ``manualControlCheck``: armed, sticks moving, in a mode the sticks do not
+        fly (auto or offboard; not Orbit, whose control mode is neither), and ``COM_RC_OVERRIDE``
+        enables it for that mode (bit 0 auto, bit 1 offboard) → the pilot takes over in Position
+        mode ("Pilot took over using sticks"); with no position, in Altitude mode
+        (``UserModeIntention::change`` with fallback). In a failsafe the request goes to the
+        framework (``_failsafe_user_override_request``), which allows it only where PX4's
+        ``UserTakeoverAllowed`` is ``Always``: a data link / manual control / battery / motor /
+        mission failsafe once its COM_FAIL_ACT_T Hold is over (COM_FAIL_ACT_T > 0.1 s), a
+        geofence Return or Land likewise, a position-loss Descend and an offboard-loss Hold,
+        Return or Land; a geofence Hold never (mode switch only)."""
+        ns = self.nav_state
+        if not self.armed or self.crashed or ns in MANUAL_NAV_STATES or ns == NavState.ORBIT:
+            return
+        bit = 2 if ns == NavState.OFFBOARD else 1  # RcOverrideBits: OFFBOARD_MODE_BIT, AUTO_MODE_BIT
+        if not int(self.params["COM_RC_OVERRIDE"]) & bit:
+            return
+        if not self.failsafe:  # _failsafe.selectedAction() <= Warn: change the user's mode
+            valid = not self.v.sim.faulty or self.v.gps.position_valid(t, self.params["EKF2_NOAID_TOUT"])
+            self.v.text(MavSeverity.INFO, "Pilot took over using sticks")
+            self.set_mode(NavState.POSCTL if valid else NavState.ALTCTL)
+            return
+        if self.position_fallback:  # Descend: the user's mode becomes Position, which falls back
+            self.v.text(MavSeverity.INFO, "Pilot took over using sticks")
+            self.user_mode_change()
+            self.user_nav_state = NavState.POSCTL
+            navl = int(self.params["COM_POSCTL_NAVL"])
+            self.switch(NavState.ALTCTL if navl == 0 else NavState.DESCEND, t)
+            return
+        if self._offboard_lost:
+            allowed = True
+        elif self._gf_flying is not None and ns == self._gf_flying:
+            allowed = self._gf_sticks
+        elif _framework_flies(self._fw.selected):
+            allowed = self._fw.sticks_takeover()
+        else:
+            allowed = False
+        if allowed:
+            self.v.text(MavSeverity.INFO, "Pilot took over using sticks")
+            self.set_mode(NavState.POSCTL)
 
     def status(self, t: int) -> VehicleStatus:
         land = self.land
@@ -303,6 +352,7 @@ class Commander:
             elif t >= pending[1]:
                 self._gf_pending = None
                 self.v.text(MavSeverity.CRITICAL, "Failsafe activated")
+                self._gf_flying, self._gf_sticks = pending[0], True  # Auto → Always after the hold
                 self.switch(pending[0], t)
         gf = self.nav.geofence
         if not (gf.max_dist or gf.max_alt or gf.custom):
@@ -331,10 +381,12 @@ class Commander:
             self.v.text(
                 MavSeverity.CRITICAL, f"Failsafe activated: entering Hold for {int(delay + 0.5)} seconds"
             )
+            self._gf_flying, self._gf_sticks = NavState.AUTO_LOITER, False
             self.switch(NavState.AUTO_LOITER, t)
             self._gf_pending = (target, t + round(delay * 1e6))
         else:
             self.v.text(MavSeverity.CRITICAL, "Failsafe activated")
+            self._gf_flying, self._gf_sticks = target, False  # Hold, or no delay: mode switch only
             self.switch(target, t)
 
     def _offboard_loss(self, t: int) -> bool:
@@ -568,6 +620,7 @@ class Commander:
         self.failsafe = False
         self._gf_active = False
         self._gf_pending = None
+        self._gf_flying = None
         self._fw.reset()
         self._mission_failing = False
         self._taken_off = False
@@ -625,6 +678,7 @@ class Commander:
         self.user_nav_state = ns
         self.failsafe = False
         self._offboard_lost = False
+        self._gf_flying = None
         self.switch(ns, self.v.time_us)
         return MavResult.ACCEPTED
 

@@ -255,6 +255,9 @@ class _Action:
     #: ``ClearCondition::OnModeChangeOrDisarm``: kept after the condition clears, until a mode
     #: change (else ``WhenConditionClears``: removed with the condition)
     sticky: bool
+    #: ``UserTakeoverAllowed::Auto`` as ``addAction`` resolves it: ``Always`` (sticks may take
+    #: over once the delay is over) with COM_FAIL_ACT_T > 0.1 s, else ``AlwaysModeSwitchOnly``
+    sticks_allowed: bool = True
     failing: bool = True
 
 
@@ -305,7 +308,7 @@ class FailsafeFramework:
         if entry is not None:
             entry.action, entry.failing = action, True
             return
-        self.actions[key] = _Action(action, cause, sticky)
+        self.actions[key] = _Action(action, cause, sticky, sticks_allowed=fail_act_t > 0.1)
         if fail_act_t > 0.1 and action != NavAction.WARN:
             self._delay_requested = True  # UserTakeoverAllowed::Auto with a delay
         if action == NavAction.WARN:
@@ -331,6 +334,22 @@ class FailsafeFramework:
             del self.actions[key]
         if self.actions and self.selected.action in _TAKEOVER_ACTIONS:
             self.takeover = True
+
+    def sticks_takeover(self) -> bool:
+        """``rc_sticks_takeover_request`` (the commander saw the sticks move in a failsafe):
+        ``getSelectedAction`` lets the user take over a Hold, Return, Land or Descend when every
+        active action allows it by sticks (``UserTakeoverAllowed::Always``) and the delay's Hold
+        is not running (that Hold is ``AlwaysModeSwitchOnly``). The actions are those left after
+        this sample's conditions cleared (manual control regained), as the request is handled in
+        the next framework update. True when taken over; the user's mode becomes Position (the
+        commander changes it)."""
+        worst = max(self.actions.values(), key=lambda a: _RANK[a.action], default=None)
+        if worst is None or worst.action not in _TAKEOVER_ACTIONS or self.delay_us > 0:
+            return False
+        if not all(a.sticks_allowed for a in self.actions.values()):
+            return False
+        self.takeover = True
+        return True
 
     def reset(self) -> None:
         """Arming or disarming: no action carries over (the built-in vehicle reports conditions
