@@ -215,3 +215,20 @@ def test_the_log_says_when_the_sticks_moved():
     moving = list(log.get_dataset("manual_control_setpoint").data["sticks_moving"])
     # the step's rate, 6 /s, low-passed (alpha 0.5 at 10 Hz): 3, 1.5, 0.75, 0.375, then under 0.3 /s
     assert moving == [0, 0, 1, 1, 1, 1, 0]
+
+
+def test_in_a_position_loss_descend_the_sticks_take_over_in_altitude_mode():
+    from uavtest.mavlink_numbers import FailureType, FailureUnit
+
+    f = Watched()
+    f.takeoff()
+    f.fly(0.5, each=f.sticks)
+    assert f.inject(FailureUnit.SENSOR_GPS, FailureType.OFF) == MavResult.ACCEPTED
+    f.fly(10, until=lambda v: v.nav_state == NavState.DESCEND, each=f.sticks)
+    assert f.v.nav_state == NavState.DESCEND  # EKF2_NOAID_TOUT, then COM_POS_FS_DELAY
+    f.fly(0.1, each=lambda: f.sticks(z=700))  # throttle up: the user's mode becomes Position,
+    v = f.v  # which without a position falls back to Altitude (COM_POSCTL_NAVL 0)
+    assert v.nav_state == NavState.ALTCTL and v.user_nav_state == NavState.POSCTL and f.said(TOOK_OVER)
+    z0 = v.body.z
+    f.fly(2, each=lambda: f.sticks(z=700))
+    assert v.body.z < z0 - 0.5 and v.nav_state == NavState.ALTCTL  # climbing on the pilot's throttle
