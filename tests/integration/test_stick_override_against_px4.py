@@ -3,8 +3,9 @@
 A mission flies towards a waypoint 150 m North; the test's ``sticks`` command starts MANUAL_CONTROL
 centred (not a movement: the first sample) and then pulls the pitch stick back. PX4 v1.15
 (COM_RC_OVERRIDE 1, COM_RC_STICK_OV 30 %/s) switches to Position mode at the pull and the
-vehicle flies back South; with COM_RC_OVERRIDE 0 the mission goes on. The built-in simulator must
-do the same, at the same moment. Runs when ``UAVTEST_PX4_BIN`` names a PX4 v1.15 SITL binary.
+vehicle flies back South, its position mode (MPC_POS_MODE 4) turning the half stick into the same
+velocity setpoints; with COM_RC_OVERRIDE 0 the mission goes on. The built-in simulator must do
+the same, at the same moment. Runs when ``UAVTEST_PX4_BIN`` names a PX4 v1.15 SITL binary.
 """
 
 from __future__ import annotations
@@ -45,9 +46,9 @@ def _test(simulator: str, override: int) -> dict:
     }
 
 
-def _fly(simulator: str, override: int, tmp_path: Path) -> tuple[list[int], float, list[float]]:
+def _fly(simulator: str, override: int, tmp_path: Path) -> tuple[list[int], float, list[float], list[float]]:
     """(nav states in order, seconds from the pull to Position mode (nan: never), the North
-    velocity at the pull and 8 s after it)."""
+    velocity at the pull and 8 s after it, the trajectory's North velocity 1..10 s after it)."""
     test = tmp_path / f"{simulator}-{override}.yaml"
     test.write_text(yaml.safe_dump(_test(simulator, override)))
     out = uavtest_run(test, tmp_path / f"{simulator}-{override}")
@@ -63,23 +64,27 @@ def _fly(simulator: str, override: int, tmp_path: Path) -> tuple[list[int], floa
     delay = (t[to_pos[0]] - pulled) / 1e6 if len(to_pos) else float("nan")
     lp = ulog.get_dataset("vehicle_local_position").data
     vx = [float(np.interp(pulled + k * 1e6, lp["timestamp"], lp["vx"])) for k in (0, 8)]
-    return order, delay, vx
+    ts = ulog.get_dataset("trajectory_setpoint").data
+    sp = [float(np.interp(pulled + k * 1e6, ts["timestamp"], ts["velocity[0]"])) for k in range(1, 11)]
+    return order, delay, vx, sp
 
 
 @pytest.mark.skipif(not os.environ.get("UAVTEST_PX4_BIN"), reason="UAVTEST_PX4_BIN is not set")
 def test_sticks_take_a_mission_over_like_px4_sih(tmp_path: Path) -> None:
-    px4_order, px4_delay, px4_vx = _fly("px4", 1, tmp_path)
-    ours_order, ours_delay, ours_vx = _fly("builtin", 1, tmp_path)
+    px4_order, px4_delay, px4_vx, px4_sp = _fly("px4", 1, tmp_path)
+    ours_order, ours_delay, ours_vx, ours_sp = _fly("builtin", 1, tmp_path)
     for order, delay, vx in ((px4_order, px4_delay, px4_vx), (ours_order, ours_delay, ours_vx)):
         assert MISSION in order and order[order.index(MISSION) + 1] == POSCTL, order
         assert 0.0 <= delay < 0.5  # at the pull, not at the centred sticks before it
         assert vx[0] > 2.0 and vx[1] < -1.0  # pulled on the way North; the pilot flies it back South
-    print(f"PX4 {px4_delay:.2f} s, {px4_vx} m/s; built-in {ours_delay:.2f} s, {ours_vx} m/s")
+    # position mode as PX4's MPC_POS_MODE 4 flies the half stick back: the same velocity setpoint
+    assert max(abs(a - b) for a, b in zip(px4_sp, ours_sp, strict=True)) < 0.4, (px4_sp, ours_sp)
+    print(f"PX4 {px4_delay:.2f} s, {px4_sp} m/s; built-in {ours_delay:.2f} s, {ours_sp} m/s")
 
 
 @pytest.mark.skipif(not os.environ.get("UAVTEST_PX4_BIN"), reason="UAVTEST_PX4_BIN is not set")
 def test_com_rc_override_0_keeps_the_mission_like_px4_sih(tmp_path: Path) -> None:
     for simulator in ("px4", "builtin"):
-        order, delay, vx = _fly(simulator, 0, tmp_path)
+        order, delay, vx, _ = _fly(simulator, 0, tmp_path)
         assert POSCTL not in order, (simulator, order)
         assert np.isnan(delay) and vx[1] > 1.0, simulator  # on North to the waypoint

@@ -29,6 +29,8 @@ from uavtest.sitl import velocity_smoothing
 from uavtest.sitl.mc_att_control import YawGains, yaw_rate_setpoint
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.simulator_sih import GRAVITY
+from uavtest.sitl.stick_acceleration_xy import StickAccelerationXY
+from uavtest.sitl.sticks import expo_deadzone, limit_unit_length
 
 __all__ = ["IDLE", "Controller", "Goal", "GoalKind", "Limits", "wrap_pi"]
 
@@ -118,6 +120,12 @@ class Limits:
     yaw_acc: float
     err_max: float
     hold_dz: float
+    xy_man_expo: float
+    z_man_expo: float
+    yaw_expo: float
+    jerk_max: float
+    vel_man_side: float
+    vel_man_back: float
     yaw_mode: int
     acc_rad: float
     alt_rad: float
@@ -161,6 +169,12 @@ class Limits:
             yaw_acc=math.radians(p["MPC_YAWRAUTO_ACC"]),
             err_max=max(p["MPC_XY_ERR_MAX"], 0.1),
             hold_dz=p["MPC_HOLD_DZ"],
+            xy_man_expo=p["MPC_XY_MAN_EXPO"],
+            z_man_expo=p["MPC_Z_MAN_EXPO"],
+            yaw_expo=p["MPC_YAW_EXPO"],
+            jerk_max=p["MPC_JERK_MAX"],
+            vel_man_side=p["MPC_VEL_MAN_SIDE"],
+            vel_man_back=p["MPC_VEL_MAN_BACK"],
             yaw_mode=int(p["MPC_YAW_MODE"]),
             acc_rad=p["NAV_ACC_RAD"],
             alt_rad=p["NAV_MC_ALT_RAD"],
@@ -318,6 +332,10 @@ class Controller:
         #: MPC_POS_MODE 0 (FlightTaskManualPosition): the stick velocity straight to the velocity
         #: loop, the position locked once slower than ``hold_max_xy`` (MPC_HOLD_MAX_XY); set by the vehicle
         self.direct_velocity = False
+        #: MPC_POS_MODE 4 (FlightTaskManualAcceleration, PX4's default): the stick is an
+        #: acceleration (``StickAccelerationXY``, built on entering position mode); set by the vehicle
+        self.stick_acceleration = False
+        self._stick_acc: StickAccelerationXY | None = None
         self.hold_max_xy = 0.8
         self.xy_locked = False
         #: the last acceleration command (NED, 0 in a hover: ``update``'s), set by the vehicle for the log
@@ -330,6 +348,7 @@ class Controller:
 
     def reset(self, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float) -> None:
         """Restart the reference at the vehicle's state (mode switch, arming)."""
+        self._stick_acc = StickAccelerationXY(vx, vy)  # FlightTaskManualAcceleration::activate
         self.px, self.py, self.pz = x, y, z
         self.vx, self.vy, self.vz = vx, vy, vz
         self.ax = self.ay = 0.0
@@ -747,33 +766,29 @@ class Controller:
         lim = self.lim
         sx, sy, sz, sr = goal.sticks
         dz = lim.hold_dz
-        sx = 0.0 if abs(sx) < dz else sx
-        sy = 0.0 if abs(sy) < dz else sy
-        sr = 0.0 if abs(sr) < dz else sr
         climb = (sz - 0.5) * 2.0
-        climb = 0.0 if abs(climb) < dz else climb
+        if goal.kind is not GoalKind.ATTITUDE:
+            # altitude and position mode (FlightTaskManualAltitude and on): Sticks' deadzone and
+            # expo; the position task's pitch / roll too, below
+            climb = expo_deadzone(climb, lim.z_man_expo, dz)
+            sr = expo_deadzone(sr, lim.yaw_expo, dz)
+        else:
+            sr = 0.0 if abs(sr) < dz else sr
+        ex, ey = expo_deadzone(sx, lim.xy_man_expo, dz), expo_deadzone(sy, lim.xy_man_expo, dz)
+        sx = 0.0 if abs(sx) < dz else sx  # stabilized and altitude mode's tilt
+        sy = 0.0 if abs(sy) < dz else sy
         c, s = math.cos(yaw), math.sin(yaw)
         if not self.in_manual:  # a manual mode just entered: its flight task starts at rest
             self.in_manual = True
             self.yaw_lock = math.nan
             self.yawrate_sp = 0.0
-        if goal.kind is GoalKind.ATTITUDE:
-            bx, by = GRAVITY * math.tan(sx * lim.man_tilt_max), GRAVITY * math.tan(sy * lim.man_tilt_max)
-            az = -(sz / 0.5 - 1.0) * GRAVITY
-            self.reset(x, y, z, vx, vy, vz, yaw)
-            self.vsx = self.vsy = self.vsz = math.nan  # no velocity control: PX4 logs none
-            rate = sr * lim.man_yaw_max
-            self.yawrate_sp = rate
-            if self.px4_yaw:
-                # mc_att_control's generate_attitude_setpoint: the yaw setpoint integrates the
-                # stick's rate, which is also fed forward
-                lock = self.yaw_lock if self.yaw_lock == self.yaw_lock else yaw
-                self.yaw_lock = self.yaw_sp = wrap_pi(lock + rate * dt)
-                rate = yaw_rate_setpoint(self.yaw_lock, yaw, rate, lim.att)
-            return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(GRAVITY, az)), rate
+            self._stick_acc = StickAccelerationXY(self.vx, self.vy, self.ax, self.ay)
         yr = self._stick_yaw(dt, sr, yaw)
-        # climb rate (altitude and position mode)
-        self.vz = -climb * (lim.z_up if climb > 0 else lim.z_down)
+        if goal.vel[2] == goal.vel[2]:  # FlightTaskDescend: a set sink rate, not a stick
+            self.vz = goal.vel[2]
+            climb = -1.0 if goal.vel[2] > 0.0 else 1.0
+        else:  # climb rate (altitude and position mode): MPC_Z_VEL_MAX_UP / _DN at full stick
+            self.vz = -climb * (lim.z_vel_max_up if climb > 0 else lim.z_vel_max_dn)
         if climb == 0.0 and abs(vz) < 0.3 and abs(self.pz - z) > 1.0:
             self.pz = z
         position_hold = climb == 0.0
@@ -785,9 +800,24 @@ class Controller:
             self.px, self.py, self.vx, self.vy = x, y, vx, vy
             self.vsx = self.vsy = math.nan  # tilt from the sticks: no horizontal velocity control
             return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
-        # position mode: sticks are a body-frame velocity
-        bvx, bvy = sx * lim.vel_manual, sy * lim.vel_manual
         self.stretch = 1.0
+        if self.stick_acceleration and not self.direct_velocity and self._stick_acc is not None:
+            # MPC_POS_MODE 4: the stick is an acceleration, turned by the locked heading
+            sa = self._stick_acc
+            heading = self.yaw_lock if self.yaw_lock == self.yaw_lock else yaw
+            sa.update(
+                ex, ey, heading, x, y, (self.vsx, self.vsy), dt,
+                vel_manual=lim.vel_manual, acc_hor=lim.acc_hor, jerk_max=lim.jerk_max,
+                tilt_max=lim.tilt_max, vel_man_side=lim.vel_man_side, vel_man_back=lim.vel_man_back,
+            )  # fmt: skip
+            self.vx, self.vy, self.ax, self.ay = sa.vx, sa.vy, sa.ax, sa.ay
+            self.px, self.py = (sa.px, sa.py) if sa.locked else (x, y)
+            ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
+            ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
+            return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
+        # position mode 0 and 3: the (expo'd) sticks are a body-frame velocity
+        ex, ey = limit_unit_length(ex, ey)
+        bvx, bvy = ex * lim.vel_manual, ey * lim.vel_manual
         wx, wy = c * bvx - s * bvy, s * bvx + c * bvy
         if self.velocity_constraint is not None:
             wx, wy = self.velocity_constraint(wx, wy, vx, vy, yaw)

@@ -612,6 +612,7 @@ class Vehicle:
         it, with its parameters."""
         p = self.params
         self.ctrl.direct_velocity = int(p["MPC_POS_MODE"]) == 0
+        self.ctrl.stick_acceleration = int(p["MPC_POS_MODE"]) == 4
         self.ctrl.hold_max_xy = p["MPC_HOLD_MAX_XY"]
         if not cp_runs(p):
             self.ctrl.velocity_constraint = None
@@ -706,10 +707,7 @@ class Vehicle:
             return self.offboard.goal
         if ns in _NOT_NAVIGATOR:
             if ns is _DESCEND:  # FlightTaskDescend: level, sinking at MPC_LAND_SPEED, no position
-                lim = self.limits
-                return Goal(
-                    GoalKind.ALTITUDE, sticks=(0.0, 0.0, 0.5 - lim.land_speed / (2.0 * lim.z_down), 0.0)
-                )
+                return Goal(GoalKind.ALTITUDE, vel=(math.nan, math.nan, self.limits.land_speed))
             kind = _MANUAL_GOAL.get(ns, GoalKind.ATTITUDE)
             if landed and c.sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2 and kind != GoalKind.ATTITUDE:
                 return Goal(GoalKind.IDLE)

@@ -301,7 +301,8 @@ def _count(v: Vehicle, seconds: float) -> tuple[dict[str, list[Msg]], dict[str, 
     gcs: dict[str, list[Msg]] = {}
     end = v.time_us + int(seconds * 1e6)
     while v.time_us < end:
-        v.receive(Msg("MANUAL_CONTROL", {"x": 300, "y": 0, "z": 500, "r": 0, "buttons": 0, "target": 1}))
+        # 60 % forward: 3.25 m/s after PX4's deadzone and expo (MPC_HOLD_DZ, MPC_XY_MAN_EXPO)
+        v.receive(Msg("MANUAL_CONTROL", {"x": 600, "y": 0, "z": 500, "r": 0, "buttons": 0, "target": 1}))
         v.advance(v.time_us + 20_000, drain=False)
         a, g = v.drain_links()
         for m in a:
@@ -357,7 +358,8 @@ def test_the_ulog_has_the_scan_and_cp_topics_in_px4_format() -> None:
     fused = log.get_dataset("obstacle_distance_fused")
     assert fused.data["increment"][0] == 10.0 and set(fused.data["distances[40]"]) == {UINT16_MAX}
     cc = log.get_dataset("collision_constraints").data
-    assert cc["original_setpoint[0]"][-1] == pytest.approx(3.0, abs=0.05)  # 0.3 stick x 10 m/s
+    # 0.6 stick: (0.6 - 0.1) / 0.9 = 0.556, expo 0.4 * 0.556 + 0.6 * 0.556^3 = 0.3251, x 10 m/s
+    assert cc["original_setpoint[0]"][-1] == pytest.approx(3.251, abs=0.02)  # its North part
     assert cc["adapted_setpoint[0]"][-1] <= cc["original_setpoint[0]"][-1]
     ds = log.get_dataset("distance_sensor").data
     assert 4 <= len(ds["timestamp"]) <= 6 + 60  # the logger takes it at 1 Hz (from boot)
@@ -439,7 +441,9 @@ def test_mpc_pos_mode_0_flies_the_stick_velocity_and_locks_below_mpc_hold_max_xy
     ctrl = Controller(Limits.of(ParamStore()))
     ctrl.direct_velocity, ctrl.hold_max_xy = True, 0.8
     ctrl.update(0.02, Goal(GoalKind.VELOCITY, sticks=(0.5, 0.0, 0.5, 0.0)), 0, 0, -10, 0, 0, 0, 0.0)
-    assert (ctrl.vx, ctrl.vy) == (5.0, 0.0)  # 0.5 x MPC_VEL_MANUAL 10, in one tick
+    # half stick, through MPC_HOLD_DZ 0.1 and MPC_XY_MAN_EXPO 0.6 (Sticks::getPitchRollExpo):
+    # (0.5 - 0.1) / 0.9 = 0.444, 0.4 * 0.444 + 0.6 * 0.444^3 = 0.2305, x MPC_VEL_MANUAL 10, in one tick
+    assert ctrl.vx == pytest.approx(2.3045, abs=1e-4) and ctrl.vy == 0.0
     centred = Goal(GoalKind.VELOCITY, sticks=(0.0, 0.0, 0.5, 0.0))
     ctrl.update(0.02, centred, 3.0, 0, -10, 2.0, 0, 0, 0.0)  # still 2 m/s: not locked
     assert not ctrl.xy_locked and ctrl.px == 3.0

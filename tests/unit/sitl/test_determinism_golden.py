@@ -266,26 +266,30 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: params_and_commands' parameter list) and manual_control_setpoint.sticks_moving as PX4's
 #: ManualControl computes it (a low-passed stick rate above COM_RC_STICK_OV, manual_and_rtl); every
 #: other logged field and every log message byte-identical (pyulog), no flight changed.
+#: stop 25, then: PX4's position mode (MPC_POS_MODE 4, StickAccelerationXY) and the sticks' deadzone
+#: and expo (MPC_XY_MAN_EXPO, MPC_Z_MAN_EXPO, MPC_YAW_EXPO; five more parameters in every header and
+#: in params_and_commands' list): manual_and_rtl's hand-flown part flies differently; mission,
+#: datalink_loss and crash have every logged field byte-identical (pyulog).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "b019003382195cd7d592b5c33b80bbbb586320ccf08e844f7b753eb37a43c22c",
+        "b7b0bcae334063cdaa29d44ae2ac3c0a7567c2e306e7ada9f30b7be9c869d1af",
         "4e7ae539fb78eddda2d976225bf4a5f76cb0d6d147531259101e910e57322f6f",
     ),
     "manual_and_rtl": (
-        "ac7eef730417b90834230ab1bff2c1ae607334c313117eb3e06f751bd15c91e0",
-        "1fcd29f38c8b3aa4ef97108e09e3c0313a9cca6715965b261d3633661fab4e63",
+        "5f15b86e1c701d4d14d8cb04fffe1b8a625f76aad6b0faeeb12956c4a8debb3f",
+        "aaabb3ea00744283f05e0cee26a875beb43d4b578405c957e9ac7bbec36671cd",
     ),
     "datalink_loss": (
-        "0652dd9bf9a567dfb09c0c30feaa9cc4097e243d3e332972ff47f16c1d551784",
+        "c37111beb49950f6eaaac08c0bf0ca600c5cce307d5e770a9065ed910ecce134",
         "c4a06a38305a54cb3c7b5ed58856c49a69b6902f6bbbc0e0b246832b4e06e7e6",
     ),
     "crash": (
-        "c917fa62cafc540c85e80823dfb0d88fb8bbdd159af9c1dc9507c313c4bf31e0",
+        "7ea16ccdc9c9aaa76c2196f04f8a839ad7e161d1aa186c0b29c93b194baabace",
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "62fa5ead5d8e3d92bab758a5bbd3b8698d653050535a6a1a8058fb474b974b75",
-        "65e4a1e1366c9793ab767b6862398dec7df46c97d8b9efb47755ce5ad6009cee",
+        "b602200a1a33ced6b5c9b8a138f135db70d73228f311187796657c64cc9de9cc",
+        "a52cceb45dc30e652cc07953df9f85060b2d13e089c237ebb0bf3d0376aaa23b",
     ),
 }
 

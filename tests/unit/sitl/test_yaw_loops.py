@@ -130,7 +130,8 @@ def test_a_yaw_stick_turns_and_the_released_heading_is_locked_and_held():
     forward with no yaw setpoint; once it has decayed, the heading is locked where it is and
     MC_YAW_P holds it (the rate loop's overshoot is pulled back)."""
     v, sticks = _posctl_vehicle()
-    turned = np.unwrap(sticks(300, 2.0))  # 30 % of MPC_MAN_Y_MAX 150 deg/s = 45 deg/s for 2 s
+    # 60 % yaw stick: 0.325 after MPC_HOLD_DZ and MPC_YAW_EXPO, of MPC_MAN_Y_MAX 150 deg/s = 49 deg/s
+    turned = np.unwrap(sticks(600, 2.0))
     assert math.degrees(turned[-1] - turned[0]) > 45.0
     sticks(0, 3.0)  # released: the filtered rate decays, then the heading locks
     held = np.unwrap(sticks(0, 5.0))
