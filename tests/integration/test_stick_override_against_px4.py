@@ -56,10 +56,10 @@ def _fly(simulator: str, override: int, tmp_path: Path) -> tuple[list[int], floa
     (log,) = (tmp_path / f"{simulator}-{override}").rglob("flight.ulg")
     ulog = ULog(str(log))
     st = ulog.get_dataset("vehicle_status").data
-    ns, t = st["nav_state"], st["timestamp"]
+    ns, t = st["nav_state"], st["timestamp"].astype(np.int64)  # signed: differences may be < 0
     order = [int(n) for i, n in enumerate(ns) if i == 0 or n != ns[i - 1]]
     cmd = ulog.get_dataset("manual_control_setpoint").data
-    pulled = cmd["timestamp"][np.nonzero(cmd["pitch"] < -0.4)[0][0]]
+    pulled = int(cmd["timestamp"][np.nonzero(cmd["pitch"] < -0.4)[0][0]])
     to_pos = np.nonzero((ns == POSCTL) & (t >= pulled - 200_000))[0]
     delay = (t[to_pos[0]] - pulled) / 1e6 if len(to_pos) else float("nan")
     lp = ulog.get_dataset("vehicle_local_position").data
@@ -75,7 +75,9 @@ def test_sticks_take_a_mission_over_like_px4_sih(tmp_path: Path) -> None:
     ours_order, ours_delay, ours_vx, ours_sp = _fly("builtin", 1, tmp_path)
     for order, delay, vx in ((px4_order, px4_delay, px4_vx), (ours_order, ours_delay, ours_vx)):
         assert MISSION in order and order[order.index(MISSION) + 1] == POSCTL, order
-        assert 0.0 <= delay < 0.5  # at the pull, not at the centred sticks before it
+        # at the pull (the logger samples manual_control_setpoint: its row may come a little after
+        # the switch), not at the centred sticks 4 s before it
+        assert -0.2 <= delay < 0.5
         assert vx[0] > 2.0 and vx[1] < -1.0  # pulled on the way North; the pilot flies it back South
     # position mode as PX4's MPC_POS_MODE 4 flies the half stick back: the same velocity setpoint
     assert max(abs(a - b) for a, b in zip(px4_sp, ours_sp, strict=True)) < 0.4, (px4_sp, ours_sp)
