@@ -775,7 +775,7 @@ class Controller:
         else:
             sr = 0.0 if abs(sr) < dz else sr
         ex, ey = expo_deadzone(sx, lim.xy_man_expo, dz), expo_deadzone(sy, lim.xy_man_expo, dz)
-        sx = 0.0 if abs(sx) < dz else sx  # stabilized and altitude mode's tilt
+        sx = 0.0 if abs(sx) < dz else sx  # stabilized mode's tilt
         sy = 0.0 if abs(sy) < dz else sy
         c, s = math.cos(yaw), math.sin(yaw)
         if not self.in_manual:  # a manual mode just entered: its flight task starts at rest
@@ -796,10 +796,17 @@ class Controller:
             self.pz = z
         az = self._z_loops(dt, z, vz, position_hold)
         if goal.kind is GoalKind.ALTITUDE:
-            bx, by = GRAVITY * math.tan(sx * lim.man_tilt_max), GRAVITY * math.tan(sy * lim.man_tilt_max)
+            # StickTiltXY: the raw sticks (no deadzone), no longer than 1, are an acceleration,
+            # tan(MPC_MAN_TILT_MAX) g at full stick (0.02-3 g), turned by the locked heading
+            # (MC_MAN_TILT_TAU's filter: not modelled, 0 by default)
+            rx, ry = limit_unit_length(goal.sticks[0], goal.sticks[1])
+            full = max(0.02, min(3.0, math.tan(min(lim.man_tilt_max, math.radians(89.0))))) * GRAVITY
+            heading = self.yaw_lock if self.yaw_lock == self.yaw_lock else yaw
+            ch, sh = math.cos(heading), math.sin(heading)
+            bx, by = rx * full, ry * full
             self.px, self.py, self.vx, self.vy = x, y, vx, vy
             self.vsx = self.vsy = math.nan  # tilt from the sticks: no horizontal velocity control
-            return c * bx - s * by, s * bx + c * by, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
+            return ch * bx - sh * by, sh * bx + ch * by, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
         self.stretch = 1.0
         if self.stick_acceleration and not self.direct_velocity and self._stick_acc is not None:
             # MPC_POS_MODE 4: the stick is an acceleration, turned by the locked heading

@@ -269,15 +269,16 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: stop 25, then: PX4's position mode (MPC_POS_MODE 4, StickAccelerationXY) and the sticks' deadzone
 #: and expo (MPC_XY_MAN_EXPO, MPC_Z_MAN_EXPO, MPC_YAW_EXPO; five more parameters in every header and
 #: in params_and_commands' list): manual_and_rtl's hand-flown part flies differently; mission,
-#: datalink_loss and crash have every logged field byte-identical (pyulog).
+#: datalink_loss and crash have every logged field byte-identical (pyulog). Then altitude mode's
+#: tilt as PX4's StickTiltXY (raw stick x tan(MPC_MAN_TILT_MAX) g): manual_and_rtl only.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
         "b7b0bcae334063cdaa29d44ae2ac3c0a7567c2e306e7ada9f30b7be9c869d1af",
         "4e7ae539fb78eddda2d976225bf4a5f76cb0d6d147531259101e910e57322f6f",
     ),
     "manual_and_rtl": (
-        "5f15b86e1c701d4d14d8cb04fffe1b8a625f76aad6b0faeeb12956c4a8debb3f",
-        "aaabb3ea00744283f05e0cee26a875beb43d4b578405c957e9ac7bbec36671cd",
+        "c2f3957b941dcdc83c4f3ceb155e1ac46e7f06f6010f9e2d192ea960ee7aa85c",
+        "bb34baeb913e28f5d3fe9549881d02794fbfcf4f4e266527c379593d34a9b595",
     ),
     "datalink_loss": (
         "c37111beb49950f6eaaac08c0bf0ca600c5cce307d5e770a9065ed910ecce134",

@@ -61,3 +61,19 @@ def test_the_stick_is_turned_by_the_heading():
     for _ in range(200):
         sa.update(1.0, 0.0, math.pi / 2, 0.0, 0.0, (sa.vx, sa.vy), DT, **LIMITS)
     assert abs(sa.vx) < 1e-6 and sa.vy > 5.0  # facing East: forward is East
+
+
+def test_altitude_mode_takes_the_raw_stick_as_an_acceleration():
+    """StickTiltXY: no deadzone, no expo; full stick is tan(MPC_MAN_TILT_MAX) g, half stick half of
+    it (19.3 degrees of tilt at 35, where a tilt in proportion to the stick would be 17.5)."""
+    from uavtest.sitl.mc_pos_control import Controller, Goal, GoalKind, Limits
+    from uavtest.sitl.params import ParamStore
+
+    ctrl = Controller(Limits.of(ParamStore()))
+    ctrl.reset(0.0, 0.0, -10.0, 0.0, 0.0, 0.0, 0.0)
+    full = math.tan(math.radians(35.0)) * 9.80665
+    half, tiny = (Goal(GoalKind.ALTITUDE, sticks=(s, 0.0, 0.5, 0.0)) for s in (0.5, 0.05))
+    ax, ay, _, _ = ctrl.update(DT, half, 0, 0, -10, 0, 0, 0, 0.0)
+    assert ax == pytest.approx(0.5 * full, rel=1e-6) and ay == pytest.approx(0.0, abs=1e-9)
+    ax, _, _, _ = ctrl.update(DT, tiny, 0, 0, -10, 0, 0, 0, 0.0)
+    assert ax == pytest.approx(0.05 * full, rel=1e-6)  # inside MPC_HOLD_DZ, still tilts
