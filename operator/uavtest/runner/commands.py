@@ -119,6 +119,12 @@ NEUTRAL_STICKS = ManualControl(x=0, y=0, z=500, r=0)  # centred sticks, hover th
 #: auto mode as the pilot taking over (COM_RC_OVERRIDE), so letting go after the switch would
 #: undo it; full stick to centre has settled under that rate within 0.5 s of 20 Hz samples
 STICK_SETTLE_MS = 600
+#: a mode position / altitude / manual with no sticks streaming starts them, centred, this long
+#: first: PX4 v1.15 refuses a manual mode without manual control ("Switching to Position is
+#: currently not available", mode_requirements.cpp), as the offboard warm-up waits for setpoints
+STICK_WARMUP_MS = 500
+#: the modes flown by the sticks
+MANUAL_MODES = frozenset({FlightMode.MANUAL, FlightMode.ALTITUDE, FlightMode.POSITION})
 LATE_MS = 1000  # a command that runs later than this after its time shifts the rest of the schedule
 SCHEDULE_SHIFTED = (
     "the command schedule was shifted: a command ran more than 1 s late because the vehicle was not "
@@ -456,6 +462,7 @@ class CommandScheduler:
         self.sticks: ManualControl | None = None
         self._last_stick_ms = -math.inf
         self._sticks_centred_ms: int | None = None  # vehicle time the runner centred them
+        self._sticks_since_ms: int | None = None  # vehicle time the sticks started streaming
         self.setpoint: PositionTargetLocal | PositionTargetGlobal | None = None  # being streamed
         self._last_setpoint_ms = -math.inf
         self._setpoint_since_ms: int | None = None  # vehicle time the stream started
@@ -600,6 +607,24 @@ class CommandScheduler:
                 self._hold_until_ms = self._sticks_centred_ms + STICK_SETTLE_MS
                 return True
             return False
+        if step.kind is StepKind.MODE and step.mode in MANUAL_MODES:
+            if self.sticks is None:
+                log.info(
+                    "t=%.2f s: sticks streamed, centred, %d ms before %s (PX4 refuses a manual mode "
+                    "without manual control)",
+                    now_ms / 1000,
+                    STICK_WARMUP_MS,
+                    step.label,
+                )
+                self.sticks = NEUTRAL_STICKS
+                self._last_stick_ms = -math.inf
+                self._sticks_centred_ms = now_ms
+                self._sticks_since_ms = now_ms
+            ready = self._sticks_since_ms + STICK_WARMUP_MS if self._sticks_since_ms is not None else now_ms
+            if now_ms < ready:
+                self._hold_until_ms = ready
+                return True
+            return False
         if step.kind is not StepKind.MODE or step.mode is not FlightMode.OFFBOARD:
             return False
         if self._setpoint_since_ms is None:
@@ -647,6 +672,8 @@ class CommandScheduler:
         self.sent.append((now_ms, step.label))
         log.info("t=%.2f s: %s", now_ms / 1000, step.label)
         if step.kind is StepKind.STICKS:
+            if self.sticks is None:
+                self._sticks_since_ms = now_ms
             self.sticks = step.sticks
             self._last_stick_ms = -math.inf
             self._sticks_centred_ms = None
@@ -659,6 +686,7 @@ class CommandScheduler:
             return []
         if step.kind is StepKind.DISARM:
             self.sticks = None
+            self._sticks_since_ms = None
             self._stop_setpoints()
         if step.kind is StepKind.FAULT:
             f = step.fault

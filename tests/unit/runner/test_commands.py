@@ -8,6 +8,7 @@ import pytest
 
 from uavtest.runner.commands import (
     STICK_SETTLE_MS,
+    STICK_WARMUP_MS,
     CommandScheduler,
     Refusal,
     arm_command,
@@ -157,10 +158,26 @@ def test_unsupported_names_any_mav_cmd() -> None:
 @pytest.mark.parametrize("result", [AckResult.DENIED, AckResult.TEMPORARILY_REJECTED, AckResult.FAILED])
 def test_every_refusal_of_a_mode_is_recorded_not_an_error(result: AckResult) -> None:
     s = CommandScheduler([cmd(2, "mode", mode="position")])
-    s.update(2000, 0.0, armed=True)
-    s.handle_ack(CommandAck(MODE, result), 2010, 0.0)
+    s.update(2000, 0.0, armed=True)  # no sticks yet: they start, centred; the mode waits for them
+    s.update(2000 + STICK_WARMUP_MS, 0.0, armed=True)
+    s.handle_ack(CommandAck(MODE, result), 2510, 0.0)
     assert s.error is None and s.idle
-    assert s.refusals == [Refusal("mode position", result.name, sent_ms=2000, ack_ms=2010)]
+    assert s.refusals == [Refusal("mode position", result.name, sent_ms=2500, ack_ms=2510)]
+
+
+def test_a_manual_mode_gets_sticks_first_as_px4_wants_manual_control() -> None:
+    """PX4 v1.15 refuses position / altitude / manual mode without manual control ("Switching to
+    Position is currently not available"): with no sticks streaming, the runner starts them
+    centred and sends the mode STICK_WARMUP_MS later; with sticks already there, at once."""
+    s = CommandScheduler([cmd(2.0, "mode", mode="position")])
+    out = [(t, m) for t in range(0, 3000, 10) for m in s.update(t, t / 1000, armed=True)]
+    sticks = [(t, m) for t, m in out if isinstance(m, ManualControl)]
+    mode = [t for t, m in out if m == mode_command(FlightMode.POSITION)]
+    assert sticks[0][0] == 2000 and {m for _, m in sticks} == {ManualControl(0, 0, 500, 0)}
+    assert mode == [2000 + STICK_WARMUP_MS]
+    t = CommandScheduler([cmd(1.0, "sticks", sticks=Sticks(x=0.0, z=0.5)), cmd(2.0, "mode", mode="altitude")])
+    out = [(k, m) for k in range(0, 3000, 10) for m in t.update(k, k / 1000, armed=True)]
+    assert [k for k, m in out if m == mode_command(FlightMode.ALTITUDE)] == [2000]
 
 
 def test_sticks_stream_at_20_hz_of_vehicle_time_and_centre_in_an_auto_mode() -> None:
