@@ -600,13 +600,10 @@ class CommandScheduler:
                     STICK_SETTLE_MS,
                     step.label,
                 )
-                self.sticks = NEUTRAL_STICKS
-                self._last_stick_ms = -math.inf
-                self._sticks_centred_ms = now_ms
-            if self._sticks_centred_ms is not None and now_ms < self._sticks_centred_ms + STICK_SETTLE_MS:
-                self._hold_until_ms = self._sticks_centred_ms + STICK_SETTLE_MS
-                return True
-            return False
+                self._centre_sticks(now_ms)
+            if self._sticks_centred_ms is None:
+                return False
+            return self._hold_until(self._sticks_centred_ms + STICK_SETTLE_MS, now_ms)
         if step.kind is StepKind.MODE and step.mode in MANUAL_MODES:
             if self.sticks is None:
                 log.info(
@@ -616,15 +613,10 @@ class CommandScheduler:
                     STICK_WARMUP_MS,
                     step.label,
                 )
-                self.sticks = NEUTRAL_STICKS
-                self._last_stick_ms = -math.inf
-                self._sticks_centred_ms = now_ms
-                self._sticks_since_ms = now_ms
-            ready = self._sticks_since_ms + STICK_WARMUP_MS if self._sticks_since_ms is not None else now_ms
-            if now_ms < ready:
-                self._hold_until_ms = ready
-                return True
-            return False
+                self._centre_sticks(now_ms)
+            if self._sticks_since_ms is None:
+                return False
+            return self._hold_until(self._sticks_since_ms + STICK_WARMUP_MS, now_ms)
         if step.kind is not StepKind.MODE or step.mode is not FlightMode.OFFBOARD:
             return False
         if self._setpoint_since_ms is None:
@@ -635,10 +627,21 @@ class CommandScheduler:
                 step.label,
             )
             return False
-        ready = self._setpoint_since_ms + self.offboard_warmup_ms
-        if now_ms >= ready:
+        return self._hold_until(self._setpoint_since_ms + self.offboard_warmup_ms, now_ms)
+
+    def _centre_sticks(self, now_ms: int) -> None:
+        """Stream centred sticks from now on (sent at once; started now if none were streaming)."""
+        if self.sticks is None:
+            self._sticks_since_ms = now_ms
+        self.sticks = NEUTRAL_STICKS
+        self._last_stick_ms = -math.inf
+        self._sticks_centred_ms = now_ms
+
+    def _hold_until(self, ready_ms: int, now_ms: int) -> bool:
+        """Hold the next step until ``ready_ms`` (True while it must wait)."""
+        if now_ms >= ready_ms:
             return False
-        self._hold_until_ms = ready
+        self._hold_until_ms = ready_ms
         return True
 
     def _stop_setpoints(self) -> None:
