@@ -27,7 +27,9 @@ Arm settle (``arm_settle_ms``, 0 = off): PX4's pre-arm checks pass while its est
 settling, and a takeoff commanded at that moment can stall a metre above the ground. With a settle
 time the arm waits until SYS_STATUS has reported ready-to-arm (MAV_SYS_STATUS_PREARM_CHECK) without
 a break for that long; a vehicle that sends no SYS_STATUS is armed at once, and after
-``arm_give_up_ms`` of waiting the arm is sent anyway (the vehicle decides).
+``arm_give_up_ms`` of waiting the arm is sent anyway (the vehicle decides). A wait longer than
+``LATE_MS`` shifts the commands after it, as a late command does: a test that takes over 24 s
+after its mission starts gets its 24 s of mission on PX4 too.
 """
 
 from __future__ import annotations
@@ -503,19 +505,25 @@ class CommandScheduler:
         their spacing from this one; each shift is noted (``delays``) and reported.
         """
         command = self._pending.popleft()
-        late = now_ms - self._due_ms(command)
-        if late > LATE_MS:
-            self.shift_ms += late
-            note = (
-                f"commands from t={command.at:g} s on run {self.shift_ms / 1000:.1f} s late: the vehicle "
-                f"was not ready for them ({_label(command)} ran at t={now_ms / 1000:.1f} s); "
-                "later commands keep their spacing"
-            )
-            log.warning("%s", note)
-            self.delays.append(note)
-            if SCHEDULE_SHIFTED not in self.warnings:
-                self.warnings.append(SCHEDULE_SHIFTED)
+        self._shift(now_ms - self._due_ms(command), now_ms, f"{_label(command)} ran", at=command.at)
         self._steps.extend(expand(command, self.home))
+
+    def _shift(self, late_ms: float, now_ms: int, what: str, at: float | None = None) -> None:
+        """Move the commands not yet started ``late_ms`` later when that is more than ``LATE_MS``:
+        the vehicle was not ready (``at``: the late command's own time; None: the wait of one
+        already started, an arm settling, which the commands after it wait out too)."""
+        if late_ms <= LATE_MS:
+            return
+        self.shift_ms += late_ms
+        since = f"from t={at:g} s on" if at is not None else "still to come"
+        note = (
+            f"commands {since} run {self.shift_ms / 1000:.1f} s late: the vehicle was not ready for "
+            f"them ({what} at t={now_ms / 1000:.1f} s); later commands keep their spacing"
+        )
+        log.warning("%s", note)
+        self.delays.append(note)
+        if SCHEDULE_SHIFTED not in self.warnings:
+            self.warnings.append(SCHEDULE_SHIFTED)
 
     @property
     def busy(self) -> bool:
@@ -718,6 +726,7 @@ class CommandScheduler:
                 if wait is not None:
                     given = self.arm_give_up_ms / 1000
                     log.warning("vehicle not settled after %g s; sending %s anyway", given, step.label)
+                self._shift(now_ms - self._waiting_since_ms, now_ms, f"{step.label} waited to arm")
                 self._waiting_since_ms = None
                 self._retry_at_ms = None
                 return self._send(step, now_ms, wall)

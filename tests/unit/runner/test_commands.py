@@ -234,6 +234,26 @@ def test_with_an_arm_settle_the_arm_waits_until_the_vehicle_has_been_ready_that_
     assert s.sent[0] == (47_000, "arm (for mode mission)")
 
 
+def test_the_commands_after_a_settling_arm_keep_their_spacing_from_it() -> None:
+    """PX4 SITL armed 11.7 s after its mission command was due (the settle): the pilot's switch
+    to position mode 24 s after the mission must still come 24 s after it, not 12 s."""
+    from uavtest.runner.commands import SCHEDULE_SHIFTED
+
+    s = CommandScheduler(
+        [cmd(1.0, "mode", mode="mission"), cmd(25.0, "mode", mode="hold")], arm_settle_ms=10_000
+    )
+    s.on_sys_status(True, 36_800)
+    sent: list[int] = []
+    for now in range(35_100, 90_000, 100):  # the runner's flight starts at 35.1 s
+        for _msg in s.update(now, now / 1000, armed=bool(sent)):
+            sent.append(now)
+        if s._current is not None and s._current.command is not None and s._retry_at_ms is None:
+            s.handle_ack(CommandAck(s._current.command.command, AckResult.ACCEPTED), now, now / 1000)
+    assert sent[0] == 46_800, "armed once ready for 10 s"
+    assert sent[-1] - sent[0] == 24_000, "hold comes 24 s after the arm and the mission, as written"
+    assert s.warnings == [SCHEDULE_SHIFTED] and "waited to arm" in s.delays[-1]
+
+
 def test_the_arm_settle_does_not_hold_a_vehicle_without_sys_status_or_forever() -> None:
     silent = CommandScheduler([cmd(1.0, "arm")], arm_settle_ms=10_000)
     assert silent.update(1000, 0.0, armed=False) == [arm_command()]  # no SYS_STATUS: armed when due
