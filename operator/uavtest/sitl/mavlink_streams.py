@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 
 from uavtest.px4.modes import NavState, base_mode_flags, custom_mode
 from uavtest.sitl import mav
+from uavtest.sitl.commander.arming import arming_denied
 from uavtest.sitl.mav import MavState, Msg
 from uavtest.sitl.simulator_sih import DRAG_VERTICAL, GRAVITY
 from uavtest.sitl.uorb import quaternion
@@ -106,7 +107,11 @@ def extended_sys_state(v: Vehicle, t: int) -> Msg:
 def sys_status(v: Vehicle, t: int) -> Msg:
     health = mav.SYS_STATUS_SENSORS & ~mav.SYS_STATUS_GPS
     if v.ready:
-        health |= mav.SYS_STATUS_GPS | (0 if v.crashed else mav.SYS_STATUS_PREARM_CHECK)
+        health |= mav.SYS_STATUS_GPS
+        # vehicle_status.pre_flight_checks_pass: canArm in the current mode (disarmed in Position
+        # mode without sticks, Return, Mission without a mission, ...: clear, as on PX4 v1.15)
+        if not v.crashed and (v.armed or arming_denied(v) is None):
+            health |= mav.SYS_STATUS_PREARM_CHECK
     return Msg(
         "SYS_STATUS",
         {

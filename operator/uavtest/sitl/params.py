@@ -42,6 +42,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "COM_LOW_BAT_ACT": (INT, 2),
     "COM_POS_FS_DELAY": (INT, 1),
     "COM_POSCTL_NAVL": (INT, 0),
+    "COM_ARM_MIS_REQ": (INT, 0),
     "COM_LKDOWN_TKO": (FLOAT, 3.0),
     "COM_ACT_FAIL_ACT": (INT, 0),
     "CBRK_FLIGHTTERM": (INT, 121212),

@@ -37,7 +37,7 @@ from uavtest.sitl import uorb as topics
 from uavtest.sitl.collision_prevention import CollisionPrevention, CpParams
 from uavtest.sitl.commander.commander import FLOWN_NAV_STATES, Commander
 from uavtest.sitl.commander.failure_detector import TUMBLE_RATE
-from uavtest.sitl.commander.vehicle_command import handle_command, unsupported
+from uavtest.sitl.commander.vehicle_command import MISSION_PLANNER, handle_command, unsupported
 from uavtest.sitl.ekf2 import Estimator
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.land_detector import LandDetector
@@ -432,8 +432,8 @@ class Vehicle:
             ns = nav_state_from_custom_mode(main, sub)
             if ns is None or ns not in FLOWN_NAV_STATES:
                 unsupported(self, f"Mode {custom_mode_name(main, sub)}")
-            else:
-                self.commander.set_mode(ns)
+            else:  # mavlink_receiver: a DO_SET_MODE from the message's sender
+                self.commander.set_mode(ns, announce=msg.compid == MISSION_PLANNER)
         return []
 
     def _on_timesync(self, msg: Msg) -> list[Msg]:
@@ -657,7 +657,7 @@ class Vehicle:
             self.recorder.data(cp.constraints)
         if cp.want_hold:  # _publishVehicleCmdDoLoiter: VEHICLE_CMD_DO_SET_MODE AUTO LOITER
             cp.want_hold = False
-            self.commander.set_mode(NavState.AUTO_LOITER)
+            self.commander.set_mode(NavState.AUTO_LOITER, announce=False)
 
     def _motor_out(self, t: int, dt: float) -> None:
         """A blocked motor (failure injection): a quadrotor cannot hold its attitude; it tumbles and
@@ -759,9 +759,9 @@ class Vehicle:
                 self.recorder.data(
                     topics.command(t, int(mav.MavCmd.NAV_RETURN_TO_LAUNCH), (0.0,) * 7, (1, 1), (1, 1), False)
                 )
-                self.commander.set_mode(NavState.AUTO_RTL)
+                self.commander.set_mode(NavState.AUTO_RTL, announce=False)
             elif ev.kind is EventKind.HOLD and self.commander.nav_state == NavState.AUTO_TAKEOFF:
-                self.commander.user_nav_state = NavState.AUTO_LOITER
+                self.commander.intend(NavState.AUTO_LOITER)
                 self.commander.switch(NavState.AUTO_LOITER, t, hold_z=float(ev.value))  # type: ignore[arg-type]
         if changed:
             self._log_mission_result()

@@ -180,9 +180,11 @@ def test_rc_loss_applies_in_hold_too_unless_com_rcl_except():
 def test_rc_loss_is_ignored_without_sticks_at_arming_and_with_stick_input_disabled():
     f = Flight()
     f.takeoff()
-    f.command(MavCmd.DO_SET_MODE, 1, 3, 0)
+    # never any sticks: Position mode cannot run (PX4 refuses it), and no loss is reported
+    assert f.command(MavCmd.DO_SET_MODE, 1, 3, 0) == MavResult.TEMPORARILY_REJECTED
     f.fly(3)
-    assert f.v.nav_state == NavState.POSCTL and not f.said("Manual control lost")
+    assert f.v.nav_state == NavState.AUTO_LOITER and not f.said("Manual control lost")
+    assert f.said("Switching to Position is currently not available")
     g = Flight(COM_RC_IN_MODE=4)
     g.takeoff()
     g.fly(1, each=g.sticks)
@@ -251,6 +253,7 @@ def test_gps_off_in_hold_descends_and_lands_then_gps_ok_restores():
 def test_gps_off_in_position_mode_falls_back_to_altitude_mode():
     f = Flight()
     f.takeoff()
+    f.fly(0.5, each=f.sticks)  # PX4 switches to Position mode only with manual control
     f.command(MavCmd.DO_SET_MODE, 1, 3, 0)
     f.inject(FailureUnit.SENSOR_GPS, FailureType.OFF)
     f.fly(8, each=f.sticks)

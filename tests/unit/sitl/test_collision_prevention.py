@@ -241,7 +241,8 @@ def _fly_at_wall(params: dict[str, float], *, sensor: bool = True, seconds: floa
     cmd(400, 1)
     cmd(22, 0, 0, 0, math.nan, math.nan, math.nan, v.home_alt + 10)
     v.fly_until(lambda v: v.body.z < -9.5 and v.nav_state == NavState.AUTO_LOITER, 60_000_000)
-    cmd(176, 1, 3, 0)  # position mode
+    v.receive(Msg("MANUAL_CONTROL", {"x": 0, "y": 0, "z": 500, "r": 0, "buttons": 0, "target": 1}))
+    cmd(176, 1, 3, 0)  # position mode (PX4 needs manual control for it: the sticks come first)
     end = v.time_us + int(seconds * 1e6)
     v.closest = math.inf  # type: ignore[attr-defined]
     while v.time_us < end and not v.crashed:
@@ -292,6 +293,8 @@ def _position_mode_vehicle(params: dict[str, float], sensor: RangeSensor | None,
         fields.update({f"param{i}": x for i, x in enumerate(p, start=1)})
         v.receive(Msg("COMMAND_LONG", fields))
     v.fly_until(lambda v: v.body.z < -9.5 and v.nav_state == NavState.AUTO_LOITER, 60_000_000)
+    # PX4 switches to Position mode only with manual control: the sticks come first, centred
+    v.receive(Msg("MANUAL_CONTROL", {"target": 1, "x": 0, "y": 0, "z": 500, "r": 0}))
     v.receive(Msg("COMMAND_LONG", {"command": 176, "param1": 1, "param2": 3, "target_system": 1}))
     return v
 

@@ -96,6 +96,7 @@ def manual_and_rtl() -> tuple[str, str]:
     s.command(MavCmd.COMPONENT_ARM_DISARM, 1)
     s.command(MavCmd.NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, HOME.alt + 6)
     s.fly(30, until=lambda v: v.nav_state == 4 and not v.landed)
+    s.sticks(0, 0, 500, 0)  # manual control first: PX4 refuses Position mode without it
     s.command(MavCmd.DO_SET_MODE, 1, 3, 0)  # POSCTL
     s.fly(4, each=lambda: s.sticks(600, 200, 500, 100))
     s.command(MavCmd.DO_SET_MODE, 1, 2, 0)  # ALTCTL
@@ -148,9 +149,10 @@ def params_and_commands() -> tuple[str, str]:
     s.command(31010)  # unsupported
     s.command(183, 1, 1500)  # DO_SET_SERVO: unsupported
     s.command(MavCmd.DO_SET_MODE, 0, 4, 4)  # no custom flag: denied
-    s.command(MavCmd.DO_SET_MODE, 1, 4, 4)  # no mission: rejected
+    s.command(MavCmd.DO_SET_MODE, 1, 4, 4)  # no mission, disarmed: accepted (PX4 v1.15) ...
+    s.command(MavCmd.COMPONENT_ARM_DISARM, 1)  # ... and arming in it refused
     s.command(MavCmd.DO_SET_MODE, 1, 6, 0)  # offboard while disarmed: accepted (PX4 v1.15)
-    s.command(MavCmd.COMPONENT_ARM_DISARM, 1)  # in offboard without setpoints: denied
+    s.command(MavCmd.COMPONENT_ARM_DISARM, 1)  # in offboard without setpoints: refused
     s.command(MavCmd.DO_SET_MODE, 1, 4, 3)  # back to hold
     s.command(MavCmd.COMPONENT_ARM_DISARM, 1)
     s.fly(2)
@@ -271,26 +273,34 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: in params_and_commands' list): manual_and_rtl's hand-flown part flies differently; mission,
 #: datalink_loss and crash have every logged field byte-identical (pyulog). Then altitude mode's
 #: tilt as PX4's StickTiltXY (raw stick x tan(MPC_MAN_TILT_MAX) g): manual_and_rtl only.
+#: stop 26: PX4 v1.15's mode requirements (COM_ARM_MIS_REQ modelled: one more parameter in every
+#: header and in params_and_commands' list): mission's logged fields byte-identical (pyulog);
+#: datalink_loss and crash differ only in vehicle_status after the disarm (PX4's onDisarm: back in
+#: the user's last mode that may arm, no failsafe action disarmed); manual_and_rtl sends its sticks
+#: before Position mode (PX4 refuses it without manual control) and says "Returning to launch";
+#: params_and_commands' Mission without a mission is taken disarmed and arming in it refused
+#: ("Arming denied: Resolve system health failures first", as in Offboard), and after landing it
+#: arms again in Hold (it stayed in Land before, a mode PX4 does not arm in).
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "b7b0bcae334063cdaa29d44ae2ac3c0a7567c2e306e7ada9f30b7be9c869d1af",
+        "c61ea60b7113a0c22142ae63d1abaac7e0121e5f9e0dd9f0daa4651d5b9b541b",
         "4e7ae539fb78eddda2d976225bf4a5f76cb0d6d147531259101e910e57322f6f",
     ),
     "manual_and_rtl": (
-        "c2f3957b941dcdc83c4f3ceb155e1ac46e7f06f6010f9e2d192ea960ee7aa85c",
-        "bb34baeb913e28f5d3fe9549881d02794fbfcf4f4e266527c379593d34a9b595",
+        "506c8a18707955ac9b0884f61511a3e29679ffc6f81fac1ed9668a915001ecb2",
+        "a3ac5efcbd2465a4bda9e85a703ee8d6be2466dea50aafc4579b3a28b70a6033",
     ),
     "datalink_loss": (
-        "c37111beb49950f6eaaac08c0bf0ca600c5cce307d5e770a9065ed910ecce134",
+        "ee62e71d7876f38f4382b19b696f2081f6d07a4a5b12bebb545978f59fb77fa9",
         "c4a06a38305a54cb3c7b5ed58856c49a69b6902f6bbbc0e0b246832b4e06e7e6",
     ),
     "crash": (
-        "7ea16ccdc9c9aaa76c2196f04f8a839ad7e161d1aa186c0b29c93b194baabace",
+        "7f155b4a781fd9c47f5bf5d6566e112b6065e35dc3cae6e3c67f8454c61f85fb",
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "b602200a1a33ced6b5c9b8a138f135db70d73228f311187796657c64cc9de9cc",
-        "a52cceb45dc30e652cc07953df9f85060b2d13e089c237ebb0bf3d0376aaa23b",
+        "b64e687b8c3c356641dc7ea9f7e26012fe56bd517c3bb3ed317ae4e9d260d66a",
+        "d088548d34edb81fd907273c81f49552875423779b2c818aeba9044a3576f6a0",
     ),
 }
 

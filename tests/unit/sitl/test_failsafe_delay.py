@@ -17,7 +17,7 @@ import pytest
 
 from uavtest.px4.modes import NavState, nav_state_from_custom_mode, split_custom_mode
 from uavtest.sitl.commander.failsafe import Cause, FailsafeFramework, NavAction, Selected, notify_texts
-from uavtest.sitl.mav import MavCmd, MavFrame, MavSeverity, Msg
+from uavtest.sitl.mav import MavCmd, MavFrame, MavResult, MavSeverity, Msg
 from uavtest.sitl.mission import NavItem
 
 from .test_battery_failures import GCS, Flight
@@ -88,9 +88,12 @@ def test_a_mode_change_during_the_hold_takes_over():
     f, t0 = _rc_lost_in_position_mode()
     f.fly(2)
     assert f.v.nav_state == NavState.AUTO_LOITER
-    assert f.command(MavCmd.DO_SET_MODE, 1, 2, 0) == 0  # ALTCTL: the user takes over
+    # Altitude mode needs manual control, which is lost: PX4 refuses it (can_run), the Hold goes on
+    assert f.command(MavCmd.DO_SET_MODE, 1, 2, 0) == MavResult.TEMPORARILY_REJECTED
+    assert f.v.nav_state == NavState.AUTO_LOITER
+    assert f.command(MavCmd.DO_SET_MODE, 1, 4, 6) == 0  # Land: the user takes over
     f.fly(8)
-    assert f.v.nav_state == NavState.ALTCTL and not f.v.failsafe
+    assert f.v.nav_state == NavState.AUTO_LAND and not f.v.failsafe
     texts = [s for _, s in f.since(t0)]
     assert "Failsafe activated: entering Hold for 5 seconds" in texts and "Failsafe activated" not in texts
 
@@ -128,10 +131,13 @@ def test_data_link_loss_lands_after_the_hold_and_the_link_back_returns_to_the_us
         until=lambda v: v.nav_state == NavState.AUTO_LOITER and -v.body.z > 7.5,
         each=lambda: f.v.receive(gcs),
     )
+    # the pilot's RC (manual control) stays: Position mode needs it; only the data link goes
+    rc = Msg("MANUAL_CONTROL", {"target": 1, "x": 0, "y": 0, "z": 500, "r": 0}, *GCS)
+    f.v.receive(rc)
     assert f.command(MavCmd.DO_SET_MODE, 1, 3, 0) == 0  # POSCTL
-    f.fly(10, until=lambda v: v.gcs_lost)
+    f.fly(10, until=lambda v: v.gcs_lost, each=lambda: f.v.receive(rc))
     t0 = f.v.time_us / 1e6
-    f.fly(6)
+    f.fly(6, each=lambda: f.v.receive(rc))
     P, H, L = NavState.POSCTL, NavState.AUTO_LOITER, NavState.AUTO_LAND
     assert f.modes_since(t0) == [(0.0, H, P, True), (5.0, L, P, True)]
     assert f.since(t0)[:5] == [

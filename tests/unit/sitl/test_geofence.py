@@ -92,6 +92,8 @@ def take_off_then_sticks(v: Vehicle, until, within_s: float = 60.0, x: int = 600
     assert command(v, MavCmd.COMPONENT_ARM_DISARM, 1) == MavResult.ACCEPTED
     command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, 488.0 + 10)
     v.fly_until(lambda v: v.nav_state == NavState.AUTO_LOITER and v.body.z < -9, 30_000_000)
+    # PX4 switches to Position mode only with manual control: the sticks come first, centred
+    v.receive(Msg("MANUAL_CONTROL", {"target": 1, "x": 0, "y": 0, "z": 500, "r": 0}, *GCS))
     assert command(v, MavCmd.DO_SET_MODE, 1, MainMode.POSCTL, 0) == MavResult.ACCEPTED
     end = v.time_us + within_s * 1e6
     while v.time_us < end and not until(v):
@@ -270,13 +272,12 @@ def test_mission_outside_the_fence_is_refused():
     v.load_mission(_mission(v, 100))
     assert "Geofence violation for waypoint 2" in texts_of(v.advance(v.time_us + 20_000))
     assert not v.nav.mission_valid
-    assert (
-        command(v, MavCmd.DO_SET_MODE, 1, MainMode.AUTO, AutoSubMode.MISSION)
-        == MavResult.TEMPORARILY_REJECTED
-    )
+    # disarmed, PX4 takes the mode change and refuses to arm in it (no valid mission)
+    assert command(v, MavCmd.DO_SET_MODE, 1, MainMode.AUTO, AutoSubMode.MISSION) == MavResult.ACCEPTED
+    assert command(v, MavCmd.COMPONENT_ARM_DISARM, 1) == MavResult.TEMPORARILY_REJECTED
     v.load_mission(_mission(v, 40))
     assert v.nav.mission_valid
-    assert command(v, MavCmd.DO_SET_MODE, 1, MainMode.AUTO, AutoSubMode.MISSION) == MavResult.ACCEPTED
+    assert command(v, MavCmd.COMPONENT_ARM_DISARM, 1) == MavResult.ACCEPTED
 
 
 # ------------------------------------------------------------------ rally points

@@ -16,7 +16,7 @@ from uavtest.sitl.mav import MavCmd, Msg
 from uavtest.sitl.recorder import MemorySink
 
 from .conftest import competition
-from .test_vehicle import command, ready_vehicle
+from .test_vehicle import GCS, command, ready_vehicle
 
 
 def test_mission2_completes_for_every_seed(shared_data: Path):
@@ -69,6 +69,7 @@ def test_position_mode_lands_with_throttle_down():
     command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
     command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, float("nan"), float("nan"), float("nan"), 488.0 + 3)
     v.fly_until(lambda v: -v.body.z > 2.5, 30_000_000)
+    v.receive(Msg("MANUAL_CONTROL", {"target": 1, "x": 0, "y": 0, "z": 500, "r": 0}, *GCS))  # needed
     command(v, MavCmd.DO_SET_MODE, 1, 3, 0)  # POSCTL
     assert v.nav_state == NavState.POSCTL
 

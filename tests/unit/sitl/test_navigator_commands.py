@@ -96,7 +96,8 @@ def test_mission_upload_during_return_keeps_returning():
     v.fly_until(lambda v: False, 2_000_000)
     v.load_mission(mission())
     v.fly_until(lambda v: not v.armed, 120_000_000)
-    assert not v.armed and v.landed and v.nav_state == NavState.AUTO_RTL
+    # disarmed, PX4 is back in the last mode that may arm (UserModeIntention::onDisarm): Hold
+    assert not v.armed and v.landed and v.nav_state == NavState.AUTO_LOITER
     assert math.hypot(v.st.x, v.st.y) < 2.0
 
 
@@ -108,7 +109,7 @@ def test_mission_rtl_item_switches_to_return_which_lands_and_disarms():
     v.fly_until(lambda v: v.nav_state == NavState.AUTO_RTL, 200_000_000)
     assert v.nav_state == NavState.AUTO_RTL and v.user_nav_state == NavState.AUTO_RTL and not v.landed
     v.fly_until(lambda v: not v.armed, 200_000_000)
-    assert not v.armed and v.nav_state == NavState.AUTO_RTL
+    assert not v.armed and v.nav_state == NavState.AUTO_MISSION  # onDisarm: the mission again
     assert math.hypot(v.st.x, v.st.y) < 2.0
 
 

@@ -93,8 +93,9 @@ def test_stale_stream_is_no_signal():
 def test_arming_in_offboard_needs_the_signal_then_takes_off_to_the_setpoint():
     s = Sim()
     assert s.offboard() == MavResult.ACCEPTED  # disarmed: PX4 always allows the mode change
-    assert s.cmd(MavCmd.COMPONENT_ARM_DISARM, 1) == MavResult.DENIED
-    assert "Arming denied: No offboard signal" in s.texts
+    # PX4 v1.15 SIH: TEMPORARILY_REJECTED, the cause ("No offboard signal") only in an EVENT
+    assert s.cmd(MavCmd.COMPONENT_ARM_DISARM, 1) == MavResult.TEMPORARILY_REJECTED
+    assert "Arming denied: Resolve system health failures first" in "".join(s.texts)  # 2 chunks
     assert not s.v.armed
     s.stream(0.5, z=0.0)  # at ground level: armed but no takeoff wanted
     assert s.cmd(MavCmd.COMPONENT_ARM_DISARM, 1) == MavResult.ACCEPTED

@@ -97,6 +97,7 @@ def test_position_mode_sticks_fly_forward():
     command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
     command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, 488.0 + 5)
     v.fly_until(lambda v: v.nav_state == NavState.AUTO_LOITER, 30_000_000)
+    v.receive(Msg("MANUAL_CONTROL", {"target": 1, "x": 0, "y": 0, "z": 500, "r": 0}, *GCS))  # needed
     assert command(v, MavCmd.DO_SET_MODE, 1, MainMode.POSCTL, 0) == MavResult.ACCEPTED
     x0 = v.body.x
     for _ in range(50):  # 5 s of full forward stick at 10 Hz (heading north)

@@ -112,6 +112,7 @@ def _posctl_vehicle():
     command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
     command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, 488.0 + 5)
     v.fly_until(lambda v: v.nav_state == NavState.AUTO_LOITER, 30_000_000)
+    v.receive(Msg("MANUAL_CONTROL", {"target": 1, "x": 0, "y": 0, "z": 500, "r": 0}, *GCS))  # needed
     command(v, MavCmd.DO_SET_MODE, 1, MainMode.POSCTL, 0)
 
     def sticks(r: int, seconds: float) -> list[float]:

@@ -7,13 +7,13 @@ from dataclasses import dataclass
 from enum import IntEnum
 from typing import TYPE_CHECKING
 
-from uavtest.px4.modes import NavState
+from uavtest.sitl.commander.mode_requirements import can_arm
 from uavtest.sitl.mav import MavResult
 
 if TYPE_CHECKING:
     from uavtest.sitl.vehicle import Vehicle
 
-__all__ = ["ARMING_CHECKS", "ArmingCheck", "Reason", "arming_denied"]
+__all__ = ["ARMING_CHECKS", "RESOLVE_FAILURES", "ArmingCheck", "Reason", "arming_denied"]
 
 
 class Reason(IntEnum):
@@ -36,21 +36,23 @@ class ArmingCheck:
     text: str | None
 
 
+#: Commander::arm: the mode the vehicle is in cannot arm (``mode_requirements.can_arm``: a
+#: stick mode without manual control, Mission without a valid mission, Offboard without
+#: setpoints, Return / Land / Descend / Orbit, ...). PX4 v1.15 SIH answers TEMPORARILY_REJECTED
+#: with this text alone; the cause goes out only as an EVENT ("No manual control input", "Mode
+#: not suitable for arming", ...), which the built-in vehicle does not send.
+RESOLVE_FAILURES = "Arming denied: Resolve system health failures first"
+
+
+def _mode_cannot_arm(v: Vehicle) -> bool:
+    return not can_arm(v.nav_state, v.commander.mode_flags(v.time_us))
+
+
 #: in PX4's order: the first failing check decides
 ARMING_CHECKS: tuple[ArmingCheck, ...] = (
     ArmingCheck(lambda v: not v.ready, MavResult.TEMPORARILY_REJECTED, "Arming denied: system not ready"),
-    # modeCheck.cpp: offboard intended without setpoints → "No offboard signal" blocks arming
-    ArmingCheck(
-        lambda v: v.nav_state == NavState.OFFBOARD and not v.offboard.signal(v.time_us),
-        MavResult.DENIED,
-        "Arming denied: No offboard signal",
-    ),
     ArmingCheck(lambda v: v.crashed, MavResult.DENIED, "Arming denied: vehicle crashed"),
-    ArmingCheck(
-        lambda v: v.nav_state == NavState.AUTO_MISSION and not v.nav.mission_valid,
-        MavResult.DENIED,
-        "Arming denied: no valid mission",
-    ),
+    ArmingCheck(_mode_cannot_arm, MavResult.TEMPORARILY_REJECTED, RESOLVE_FAILURES),
 )
 
 

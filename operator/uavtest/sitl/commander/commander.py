@@ -43,6 +43,7 @@ from uavtest.sitl.commander.failsafe import (
     battery_action,
     notify_texts,
 )
+from uavtest.sitl.commander.mode_requirements import MODE_NAMES, ModeFlags, can_run, prevents_arming
 from uavtest.sitl.hysteresis import Hysteresis
 from uavtest.sitl.land_detector import Transition
 from uavtest.sitl.mav import MavResult, MavSeverity
@@ -107,6 +108,9 @@ class Commander:
         self.armed_at_us = 0
         self.nav_state = NavState.AUTO_LOITER
         self.user_nav_state = NavState.AUTO_LOITER
+        #: UserModeIntention's _nav_state_after_disarming: the last mode the user picked that
+        #: does not prevent arming; the user's mode again on disarm (``disarm``)
+        self.after_disarming = NavState.AUTO_LOITER
         self.nav_state_us = 0
         self.arming_reason = 0
         self.disarming_reason = 0
@@ -192,12 +196,12 @@ class Commander:
         if not self.failsafe:  # _failsafe.selectedAction() <= Warn: change the user's mode
             valid = not self.v.sim.faulty or self.v.gps.position_valid(t, self.params["EKF2_NOAID_TOUT"])
             self.v.text(MavSeverity.INFO, "Pilot took over using sticks")
-            self.set_mode(NavState.POSCTL if valid else NavState.ALTCTL)
+            self.set_mode(NavState.POSCTL if valid else NavState.ALTCTL, announce=False)
             return
         if self.position_fallback:  # Descend: the user's mode becomes Position, which falls back
             self.v.text(MavSeverity.INFO, "Pilot took over using sticks")
             self.user_mode_change()
-            self.user_nav_state = NavState.POSCTL
+            self.intend(NavState.POSCTL)
             navl = int(self.params["COM_POSCTL_NAVL"])
             self.switch(NavState.ALTCTL if navl == 0 else NavState.DESCEND, t)
             return
@@ -211,7 +215,7 @@ class Commander:
             allowed = False
         if allowed:
             self.v.text(MavSeverity.INFO, "Pilot took over using sticks")
-            self.set_mode(NavState.POSCTL)
+            self.set_mode(NavState.POSCTL, announce=False)
 
     def status(self, t: int) -> VehicleStatus:
         land = self.land
@@ -296,7 +300,7 @@ class Commander:
         Mission mode → the user's mode becomes Hold (the navigator loiters where it ended)."""
         if self.armed and not self.land.landed and self.nav_state == NavState.AUTO_MISSION:
             self._fw.mode_change()
-            self.user_nav_state = NavState.AUTO_LOITER
+            self.intend(NavState.AUTO_LOITER)
             self.switch(NavState.AUTO_LOITER, t)
 
     def _check_mission_failure(self, t: int) -> None:
@@ -648,6 +652,14 @@ class Commander:
         self.status_dirty = True
         self.v.text(MavSeverity.INFO, text)
         self.close_log = True
+        # UserModeIntention::onDisarm: back to the last mode that may arm (after Land, Return or
+        # Orbit: the one before); disarmed, the failsafe framework selects no action, so the
+        # vehicle is in the user's mode
+        self.user_nav_state = self.after_disarming
+        self.failsafe = False
+        self._offboard_lost = False
+        if not self.crashed:
+            self.switch(self.user_nav_state, t)
 
     def crash(self, t: int, index: int) -> None:
         b = self.body
@@ -661,21 +673,48 @@ class Commander:
         self.status_dirty = True
         self.v.text(MavSeverity.CRITICAL, f"crash: collided with obstacle {index}")
 
-    def set_mode(self, ns: NavState | None) -> MavResult:
+    def mode_flags(self, t: int) -> ModeFlags:
+        """What the mode checks see missing now (failsafe_flags): manual control (never seen, or
+        lost for COM_RC_LOSS_T), the position (GNSS failed for EKF2_NOAID_TOUT), a valid mission,
+        the offboard signal, home."""
+        v, p = self.v, self.params
+        return ModeFlags(
+            manual_control_lost=self._sticks_us is None or self.rc_lost,
+            position_invalid=v.sim.faulty and not v.gps.position_valid(t, p["EKF2_NOAID_TOUT"]),
+            mission_missing=not self.nav.mission_valid,
+            offboard_signal_lost=not v.offboard.signal(t),
+            home_invalid=not self.home_set,
+            arm_needs_mission=bool(int(p["COM_ARM_MIS_REQ"])),
+        )
+
+    def intend(self, ns: NavState) -> None:
+        """The user's mode becomes ``ns`` (``UserModeIntention::change`` once allowed)."""
+        self.user_nav_state = ns
+        if not prevents_arming(ns):
+            self.after_disarming = ns
+
+    def may_switch(self, ns: NavState, *, announce: bool = True) -> bool:
+        """``UserModeIntention::change``'s check: disarmed, always; armed, when ``ns`` can run
+        (else ``printRejectMode``'s text, when ``announce``)."""
+        if not self.armed or can_run(ns, self.mode_flags(self.v.time_us)):
+            return True
+        if announce:
+            self.v.text(MavSeverity.CRITICAL, f"Switching to {MODE_NAMES[ns]} is currently not available")
+        return False
+
+    def set_mode(self, ns: NavState | None, *, announce: bool = True) -> MavResult:
+        """A user's mode change (``UserModeIntention::change``): always allowed while disarmed;
+        armed, refused TEMPORARILY_REJECTED when the mode cannot run (``mode_requirements``), with
+        ``printRejectMode``'s text when ``announce`` (PX4 prints it for DO_SET_MODE only when the
+        request came from component 190, MAV_COMP_ID_MISSIONPLANNER, as the runner's does)."""
         if ns is None:
             return MavResult.DENIED
-        if ns == NavState.OFFBOARD and self.armed and not self.v.offboard.signal(self.v.time_us):
-            # UserModeIntention::change: armed, mode cannot run (no offboard signal) →
-            # Commander.cpp DO_SET_MODE: TEMPORARILY_REJECTED, printRejectMode's text
-            self.v.text(MavSeverity.CRITICAL, "Switching to Offboard is currently not available")
+        if not self.may_switch(ns, announce=announce):
             return MavResult.TEMPORARILY_REJECTED
         if self.crashed:
             return MavResult.DENIED
-        if ns == NavState.AUTO_MISSION and not self.nav.mission_valid:
-            self.v.text(MavSeverity.CRITICAL, "Mode not available: no valid mission")
-            return MavResult.TEMPORARILY_REJECTED
         self.user_mode_change()
-        self.user_nav_state = ns
+        self.intend(ns)
         self.failsafe = False
         self._offboard_lost = False
         self._gf_flying = None

@@ -29,7 +29,7 @@ from uavtest.sitl.uorb import VehicleCommand, VehicleCommandAck, command
 if TYPE_CHECKING:
     from uavtest.sitl.vehicle import Vehicle
 
-__all__ = ["HANDLERS", "Handler", "handle_command"]
+__all__ = ["HANDLERS", "MISSION_PLANNER", "Handler", "handle_command"]
 
 #: (vehicle, command, replies to append to) → MAV_RESULT
 Handler = Callable[["Vehicle", VehicleCommand, list[Msg]], MavResult]
@@ -45,6 +45,7 @@ def unsupported(v: Vehicle, what: str) -> MavResult:
 
 
 _HOME_POSITION = 242
+MISSION_PLANNER = 190  # MAV_COMP_ID_MISSIONPLANNER
 _INT32_MAX = 2**31 - 1
 #: VEHICLE_CMD_RESULT_CANCELLED (PX4 msg/VehicleCommandAck.msg; MAVLink MAV_RESULT_CANCELLED,
 #: which the installed pymavlink's common dialect lacks, so MavResult does not carry it)
@@ -69,7 +70,8 @@ def _set_mode(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
         ns = nav_state_from_custom_mode(main, sub)
         if ns is None or ns not in FLOWN_NAV_STATES:
             return unsupported(v, f"Mode {custom_mode_name(main, sub)}")
-        return v.commander.set_mode(ns)
+        # Commander.cpp: the refusal is printed only for a request from the mission planner
+        return v.commander.set_mode(ns, announce=c.from_external and c.source_component == MISSION_PLANNER)
     return MavResult.DENIED
 
 
@@ -77,34 +79,50 @@ def _takeoff(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
     cmdr = v.commander
     if cmdr.crashed:
         return MavResult.DENIED
+    if not cmdr.may_switch(NavState.AUTO_TAKEOFF):
+        return MavResult.TEMPORARILY_REJECTED
     p7 = c.param7
     alt = p7 - cmdr.home[5] + cmdr.home[2] if math.isfinite(p7) else None
     cmdr.user_mode_change()
-    cmdr.user_nav_state = NavState.AUTO_TAKEOFF
+    cmdr.intend(NavState.AUTO_TAKEOFF)
     cmdr.switch(NavState.AUTO_TAKEOFF, v.time_us, target_alt=alt)
     return MavResult.ACCEPTED
 
 
 def _land(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
-    return v.commander.set_mode(NavState.AUTO_LAND)
+    result = v.commander.set_mode(NavState.AUTO_LAND)
+    if result == MavResult.ACCEPTED:
+        v.text(MavSeverity.INFO, "Landing at current position")
+    return result
 
 
 def _return(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
-    return v.commander.set_mode(NavState.AUTO_RTL)
+    result = v.commander.set_mode(NavState.AUTO_RTL)
+    if result == MavResult.ACCEPTED:
+        v.text(MavSeverity.INFO, "Returning to launch")
+    return result
 
 
 def _mission_start(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
-    if not v.nav.mission:
+    """Commander.cpp MISSION_START: DENIED without a valid mission ("Mission start denied! No
+    valid mission") or a first item out of range; else the mode changes to Mission and the
+    vehicle arms, both or TEMPORARILY_REJECTED ("Switching to Mission is currently not
+    available")."""
+    if not v.nav.mission or not v.nav.mission_valid:
+        v.text(MavSeverity.CRITICAL, "Mission start denied! No valid mission")
         return MavResult.DENIED
     first = int(c.param1) if math.isfinite(c.param1) else 0
-    if 0 < first < len(v.nav.mission):
+    if not -1 <= first < len(v.nav.mission):
+        return MavResult.DENIED
+    if first > 0:
         v.nav.set_current(first, v.time_us / 1e6)
     cmdr = v.commander
-    result = MavResult.ACCEPTED
-    if not cmdr.armed:
+    result = cmdr.set_mode(NavState.AUTO_MISSION, announce=False)
+    if result == MavResult.ACCEPTED and not cmdr.armed:
         result = cmdr.arm(v.time_us, Reason.MISSION_START)
-    if result == MavResult.ACCEPTED:
-        result = cmdr.set_mode(NavState.AUTO_MISSION)
+    if result != MavResult.ACCEPTED:
+        v.text(MavSeverity.CRITICAL, "Switching to Mission is currently not available")
+        return MavResult.TEMPORARILY_REJECTED
     return result
 
 
@@ -154,11 +172,11 @@ def _orbit(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult:
     """DO_ORBIT (Commander.cpp: switch to nav state ORBIT, ACCEPTED; the Orbit flight task takes
     the parameters, FlightTaskOrbit.cpp): see ``flight_task_orbit``."""
     cmdr = v.commander
-    if cmdr.crashed:
+    if cmdr.crashed or not cmdr.may_switch(NavState.ORBIT, announce=False):
         v.text(MavSeverity.CRITICAL, "Orbit command rejected")
         return MavResult.TEMPORARILY_REJECTED
     cmdr.user_mode_change()
-    cmdr.user_nav_state = NavState.ORBIT
+    cmdr.intend(NavState.ORBIT)
     cmdr.failsafe = False
     cmdr.switch(NavState.ORBIT, v.time_us)
     x = y = None
