@@ -72,7 +72,7 @@ def test_a_refused_mode_is_fail_with_the_vehicles_statustext(tmp_path: Path) -> 
     assert r["verdict"] == "fail"
     assert r["reason"] == (
         "the vehicle never took off: vehicle refused mode mission (COMMAND_ACK TEMPORARILY_REJECTED): "
-        '"Mode not available: no valid mission"'
+        '"Switching to Mission is currently not available"'  # PX4 v1.15's words
     )
     assert r["metrics"]["flight_time"] == 0.0
 

@@ -7,64 +7,25 @@ PX4 v1.15 build); skips otherwise. PX4 instance 0 sends its onboard link to 1454
 
 from __future__ import annotations
 
-import os
-import shutil
-import signal
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 import yaml
 
+from harness.px4_sitl import running_px4
 from uavtest.analysis.models import ReplicaResult, Verdict
 from uavtest.analysis.trajectory import Trajectory
-from uavtest.engine.px4home import px4_home_env, sih_latlon_is_int
-from uavtest.spec.models import Home
 
 pytestmark = [pytest.mark.integration, pytest.mark.px4, pytest.mark.slow]
 
 
 @pytest.fixture
-def px4(tmp_path: Path) -> subprocess.Popen[bytes]:
-    binary = os.environ.get("UAVTEST_PX4_BIN")
-    if not binary:
-        pytest.skip("UAVTEST_PX4_BIN is not set (a PX4 v1.15 SITL binary: build/px4_sitl_default/bin/px4)")
-    exe = Path(binary).resolve()
-    if not exe.is_file():
-        pytest.fail(f"UAVTEST_PX4_BIN={binary} is not a file")
-    build = exe.parent.parent  # build/px4_sitl_default
-    rootfs = tmp_path / "rootfs"
-    rootfs.mkdir()
-    env = {
-        **os.environ,
-        "PX4_SIM_MODEL": "sihsim_quadx",
-        "PX4_SYS_AUTOSTART": "10040",
-        "PX4_SIMULATOR": "sihsim",
-        "PX4_SIM_SPEED_FACTOR": os.environ.get("UAVTEST_PX4_SPEED", "10"),
-        "HEADLESS": "1",
-        # start where the test's mission is (the default world.home), not at PX4's default place
-        **px4_home_env(Home(), int_latlon=sih_latlon_is_int(exe)),
-    }
-    log = open(tmp_path / "px4.log", "wb")  # noqa: SIM115
-    proc = subprocess.Popen(
-        [str(exe), "-i", "0", "-d", str(build / "etc")],
-        cwd=rootfs,
-        env=env,
-        stdin=subprocess.DEVNULL,
-        stdout=log,
-        stderr=subprocess.STDOUT,
-    )
-    yield proc  # type: ignore[misc]
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(5)
-    log.close()
-    shutil.rmtree(rootfs, ignore_errors=True)
+def px4(tmp_path: Path) -> Iterator[subprocess.Popen[bytes]]:
+    with running_px4(tmp_path) as proc:
+        yield proc
 
 
 def test_the_runner_flies_a_mission_on_px4_and_downloads_its_log(

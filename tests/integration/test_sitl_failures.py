@@ -104,6 +104,7 @@ def test_rc_loss_in_position_mode_returns(vehicle: LockstepClient):
     c = vehicle
     set_param(c, "NAV_RCL_ACT", 2, is_int=True)  # the test's params file says 3 (land)
     take_off(c, 6)
+    c.conn.mav.manual_control_send(1, 0, 0, 500, 0, 0)  # PX4 takes Position mode only with sticks
     assert c.command(176, 1, 3, 0) == mavlink2.MAV_RESULT_ACCEPTED  # POSCTL
     # sticks at every lockstep grant for 2 s of vehicle time, then silence
     start = c.t_ms

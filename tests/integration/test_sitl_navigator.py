@@ -160,8 +160,18 @@ def test_mission_upload_during_return_keeps_returning(client: Client):
     assert client.command(20) == 0
     client.fly(2)
     assert client.upload(MISSION) == 0
-    hb = client.wait(lambda m: m.get_type() == "HEARTBEAT" and not m.base_mode & 128, 120)
-    assert mode(hb) == (AUTO, RTL)
+    armed_modes: set[tuple[int, int]] = set()
+
+    def disarmed(m) -> bool:
+        if m.get_type() != "HEARTBEAT":
+            return False
+        if m.base_mode & 128:
+            armed_modes.add(mode(m))
+        return not m.base_mode & 128
+
+    hb = client.wait(disarmed, 120)
+    assert armed_modes == {(AUTO, RTL)}  # returned all the way: the upload changed nothing
+    assert mode(hb) == (AUTO, LOITER)  # disarmed, back in the last mode that may arm (onDisarm)
     p = client.position()
     assert math.hypot(p.x, p.y) < 2.0 and -p.z < 0.5
 
@@ -172,7 +182,7 @@ def test_mission_rtl_item_switches_to_return_which_lands_and_disarms(client: Cli
     assert client.command(300) == 0  # MISSION_START arms and starts
     client.wait(lambda m: m.get_type() == "HEARTBEAT" and mode(m) == (AUTO, RTL), 200)
     hb = client.wait(lambda m: m.get_type() == "HEARTBEAT" and not m.base_mode & 128, 200)
-    assert mode(hb) == (AUTO, RTL)
+    assert mode(hb) == (AUTO, SUB_MISSION)  # disarmed, PX4's onDisarm: the user's mission again
     p = client.position()
     assert math.hypot(p.x, p.y) < 2.0
     assert any("RTL" in t for t in client.texts)
@@ -305,7 +315,9 @@ def test_uavtest_run_flies_speed_goto_orbit_land_start_and_return(repo_root: Pat
     ulog = ULog(str(log))
     status = ulog.get_dataset("vehicle_status").data
     states = [int(s) for i, s in enumerate(status["nav_state"]) if i == 0 or s != status["nav_state"][i - 1]]
-    assert states[-4:] == [3, 4, 21, 5]  # mission → hold (goto) → orbit → return
+    # mission → hold (goto) → orbit → return; disarmed, Hold (PX4's onDisarm: the last mode that
+    # may arm, the goto's)
+    assert states[-5:] == [3, 4, 21, 5, 4]
     acks = ulog.get_dataset("vehicle_command_ack").data
     results = dict(zip((int(c) for c in acks["command"]), (int(r) for r in acks["result"]), strict=True))
     assert results[178] == 0 and results[192] == 0 and results[34] == 0

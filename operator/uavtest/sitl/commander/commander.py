@@ -111,6 +111,7 @@ class Commander:
         #: UserModeIntention's _nav_state_after_disarming: the last mode the user picked that
         #: does not prevent arming; the user's mode again on disarm (``disarm``)
         self.after_disarming = NavState.AUTO_LOITER
+        self.ever_had_mode_change = False  # UserModeIntention::everHadModeChange
         self.nav_state_us = 0
         self.arming_reason = 0
         self.disarming_reason = 0
@@ -175,6 +176,11 @@ class Commander:
             self._fw.clear(MANUAL_CONTROL_LOST.action_param)
         if moving:
             self._stick_override(t)
+        if not self.armed and not self.ever_had_mode_change:
+            # manualControlCheck, disarmed: "if there's never been a mode change force position
+            # control as initial state" (MAVLink sticks)
+            self.intend(NavState.POSCTL)
+            self.switch(NavState.POSCTL, t)
 
     def _stick_override(self, t: int) -> None:
         """Commander.cpp ``manualControlCheck``: armed, sticks moving, in a mode the sticks do not
@@ -258,6 +264,7 @@ class Commander:
             self.st.landed = land.landed
             self.v._out.append(STREAMS["EXTENDED_SYS_STATE"](self.v, t))
         if not self.armed:
+            self._manual_control_lost(t)
             return
         if self.crashed:
             if self.body.on_ground:
@@ -319,6 +326,16 @@ class Commander:
         else:
             self._fw.clear("mission_failure")
 
+    def _manual_control_lost(self, t: int) -> bool:
+        """manual_control_signal_lost rises now: sticks seen, none for COM_RC_LOSS_T (tracked
+        armed or not, as PX4's RC check does: arming then knows the sticks are gone)."""
+        if self.rc_lost or self._sticks_us is None:
+            return False
+        if t - self._sticks_us <= max(self.params["COM_RC_LOSS_T"], 0.1) * 1e6:
+            return False
+        self.rc_lost = True
+        return True
+
     def _check_failsafes(self, t: int) -> None:
         """Failsafes in the air (failsafe.cpp ``checkStateAndMode``): data link, manual control,
         position (battery and failure detector: ``monitor``)."""
@@ -332,14 +349,8 @@ class Commander:
         ):
             self.gcs_lost = True
             self._failsafe(DATA_LINK_LOST, t)
-        if (
-            not self.rc_lost
-            and self._sticks_us is not None
-            and t - self._sticks_us > max(p["COM_RC_LOSS_T"], 0.1) * 1e6
-        ):
-            self.rc_lost = True
-            if not self._rc_loss_ignored():
-                self._failsafe(MANUAL_CONTROL_LOST, t)
+        if self._manual_control_lost(t) and not self._rc_loss_ignored():
+            self._failsafe(MANUAL_CONTROL_LOST, t)
         self._check_mission_failure(t)
         if self.v.sim.faulty:
             self._check_position(t)
@@ -690,6 +701,7 @@ class Commander:
     def intend(self, ns: NavState) -> None:
         """The user's mode becomes ``ns`` (``UserModeIntention::change`` once allowed)."""
         self.user_nav_state = ns
+        self.ever_had_mode_change = True
         if not prevents_arming(ns):
             self.after_disarming = ns
 
