@@ -135,6 +135,20 @@ def test_a_waypoint_is_flown_to_facing_its_heading():
 # ---------------------------------------------------------------- 2. the takeoff item's position
 
 
+def test_a_first_waypoint_on_the_ground_is_not_climbed_to_the_takeoff_after_it_is():
+    """An ArduPilot-style QGC WPL file (MAVProxy's ``wp load``) sends home as item 0: a waypoint
+    where the vehicle stands. checkClimbRequired climbs only to an item more than NAV_MC_ALT_RAD
+    above: no "Climb to 0.0 meters above home"; the item is reached on the ground and the takeoff
+    item after it climbs."""
+    st = State(x=0.0, y=0.0, z=0.02, yaw=0.0, landed=True)
+    items = [at(0, MavCmd.NAV_WAYPOINT, 0.0, 0.0, 0.0), at(1, MavCmd.NAV_TAKEOFF, 0.0, 0.0, 5.0)]
+    nav = navigator(items, st)
+    events = run(nav, st, 0.0, 0.2)
+    assert reached(events, 0) is not None and nav.current == 1
+    assert texts(events) == ["Climb to 5.0 meters above home"]
+    assert nav.update(st, 0.3).kind is GoalKind.TAKEOFF
+
+
 def test_a_takeoff_item_climbs_then_flies_to_its_position():
     """Mission::handleTakeoff: a TAKEOFF setpoint above where the vehicle stands (the item as
     next), then the item as a waypoint from there (previous: the climb's setpoint); the item is

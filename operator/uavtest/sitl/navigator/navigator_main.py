@@ -651,8 +651,11 @@ class Navigator:
             s.phase = Phase.FLY
             return
         climb, self._climb_z = self._climb_z, None
-        if climb is None and st.landed:
-            climb = s.z  # on the ground in mission mode without an activation: take off to it
+        if climb is None and st.landed and st.z - s.z > self.params["NAV_MC_ALT_RAD"]:
+            # on the ground in mission mode without an activation: take off to it, when it is
+            # above (checkClimbRequired's rule: not a waypoint on the ground, such as the home
+            # item 0 of an ArduPilot-style QGC WPL file)
+            climb = s.z
         if climb is not None and climb < st.z:
             s.extra.update(tx=st.x, ty=st.y, cz=climb)
             if st.landed:
