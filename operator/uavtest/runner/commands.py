@@ -479,6 +479,9 @@ class CommandScheduler:
         self._ready_since_ms: int | None = None  # vehicle time it became ready to arm (None: not ready)
         self._waiting_since_ms: int | None = None  # an arm waits for the vehicle to settle, since then
         self.shift_ms = 0.0  # how far the schedule moved because a command ran late (``_take_next``)
+        #: vehicle ms the flight waited for the vehicle to settle before arming: the runner's
+        #: wait, which the test's timeout does not count (PX4 needs it, the built-in vehicle not)
+        self.settle_wait_ms = 0.0
         self.delays: list[str] = []  # a note per shift, with its times (the runner's log)
         self.warnings: list[str] = []  # the same, worded once for the result and the run's summary
 
@@ -524,6 +527,12 @@ class CommandScheduler:
         self.delays.append(note)
         if SCHEDULE_SHIFTED not in self.warnings:
             self.warnings.append(SCHEDULE_SHIFTED)
+
+    def settle_waited_ms(self, now_ms: float) -> float:
+        """Vehicle ms the arm has waited for the vehicle to settle so far, a wait going on now
+        included (``settle_wait_ms``)."""
+        going = now_ms - self._waiting_since_ms if self._waiting_since_ms is not None else 0.0
+        return self.settle_wait_ms + max(0.0, going)
 
     @property
     def busy(self) -> bool:
@@ -726,6 +735,7 @@ class CommandScheduler:
                 if wait is not None:
                     given = self.arm_give_up_ms / 1000
                     log.warning("vehicle not settled after %g s; sending %s anyway", given, step.label)
+                self.settle_wait_ms += now_ms - self._waiting_since_ms
                 self._shift(now_ms - self._waiting_since_ms, now_ms, f"{step.label} waited to arm")
                 self._waiting_since_ms = None
                 self._retry_at_ms = None

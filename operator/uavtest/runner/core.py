@@ -401,7 +401,7 @@ class ReplicaCore:
         seen = self._waiting_at if self._waiting_at is not None else self.now_ms
         if self.stage is Stage.FLIGHT:
             sched, start = self.scheduler, self.report.start_ms
-            timeout_at = math.inf if start is None else start + self.cfg.timeout_s * 1000.0
+            timeout_at = math.inf if start is None else start + self._timeout_ms(seen)
             until = grant_until(
                 seen,
                 max_ms=self.cfg.step_ms,
@@ -505,16 +505,24 @@ class ReplicaCore:
         ):
             return out + self._settle(Ending.LANDED, wall)
         assert rep.start_ms is not None
-        if now - rep.start_ms >= self.cfg.timeout_s * 1000:
+        if now - rep.start_ms >= self._timeout_ms(now):
             if not rep.armed_ever and self.scheduler.refusals:
                 rep.notes.append(f"timeout after {self.cfg.timeout_s:g} s of vehicle time, never armed")
                 return out + self._settle(Ending.REFUSED, wall)  # the vehicle's doing, not the bench's
             if not rep.armed_ever:
                 why = f"timeout: the vehicle never armed in {self.cfg.timeout_s:g} s of vehicle time"
                 return out + self._settle(Ending.ERROR, wall, error=why)
-            rep.notes.append(f"timeout after {self.cfg.timeout_s:g} s of vehicle time")
+            waited = self.scheduler.settle_wait_ms / 1000
+            extra = f" (and {waited:.1f} s waiting for the vehicle to settle before arming)" if waited else ""
+            rep.notes.append(f"timeout after {self.cfg.timeout_s:g} s of vehicle time{extra}")
             return out + self._settle(Ending.TIMEOUT, wall)
         return out
+
+    def _timeout_ms(self, now_ms: float) -> float:
+        """The test's timeout from the flight's start, in vehicle ms, plus the time the runner
+        held the arm for the vehicle to settle (``arm_settle``): PX4 needs that wait, the built-in
+        vehicle does not, and a test's timeout means the same flight on both."""
+        return self.cfg.timeout_s * 1000.0 + self.scheduler.settle_waited_ms(now_ms)
 
     def _settle(self, ending: Ending, wall: float, *, error: str | None = None) -> list[Outgoing]:
         rep = self.report

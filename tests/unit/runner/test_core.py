@@ -311,3 +311,28 @@ def test_a_mission_flight_without_progress_ends_blocked_after_a_minute() -> None
     assert core.done and rep.ending is Ending.BLOCKED
     assert any(n.startswith("blocked: no progress toward mission item 1 for 60 s") for n in rep.notes)
     assert rep.end_ms is not None and 60_000 <= rep.end_ms < 70_000
+
+
+def test_the_wait_for_the_vehicle_to_settle_does_not_count_against_the_timeout() -> None:
+    """PX4 SITL: the runner holds the arm until the vehicle has been ready for arm_settle_s; that
+    wait is the bench's, so a 5 s test still flies 5 s after it (the built-in vehicle needs none)."""
+    from uavtest.runner.events import SysStatus
+
+    READY = 0x10000000  # MAV_SYS_STATUS_PREARM_CHECK
+    core = ReplicaCore(config(timeout_s=5.0, arm_settle_s=10.0))
+    vehicle = ScriptedVehicle()
+    core.start(0.0)
+    heard, *positions = boot(0)
+    exchange(core, vehicle, [heard, SysStatus(READY), *positions], wall=0.1)  # ready from t=0
+    for k in range(1, 200):
+        t = k * 100
+        msgs = [LocalPosition(t, 0.0, 0.0, -5.0 if vehicle.armed else 0.0)]
+        if t % 1000 == 0:
+            msgs += [heartbeat(armed=vehicle.armed), SysStatus(READY)]
+        exchange(core, vehicle, msgs, wall=0.2 + k * 0.1)
+        if core.done:
+            break
+    rep = core.report
+    assert rep.ending is Ending.TIMEOUT and rep.armed_ever
+    assert rep.end_ms == 15_000  # armed at 10 s (settled), then the test's 5 s
+    assert any("and 10.0 s waiting for the vehicle to settle" in n for n in rep.notes)
