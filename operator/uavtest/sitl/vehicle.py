@@ -44,6 +44,7 @@ from uavtest.sitl.land_detector import LandDetector
 from uavtest.sitl.local_planner import LocalPlanner, PlannerParams
 from uavtest.sitl.manual_control import StickMovement
 from uavtest.sitl.mav import LandedState, MavSeverity, Msg, ParamType
+from uavtest.sitl.mavlink_ftp import nak
 from uavtest.sitl.mavlink_io import custom_mode_name
 from uavtest.sitl.mavlink_streams import ORBIT_STATUS_HZ, STREAMS, SW_VERSION, orbit_execution_status
 from uavtest.sitl.mc_hover_thrust_estimator import HoverThrustEstimator
@@ -207,6 +208,7 @@ class Vehicle:
         #: links that stream telemetry (the edge turns a quiet GCS link on once a station speaks)
         self.streaming = [True] * len(self.schedules)
         self.rx_link = 0  # the link of the message being handled (SET_MESSAGE_INTERVAL applies to it)
+        self._ftp_said = False  # "MAVLink FTP not supported" sent
         self.recorder = FlightRecorder(
             sink,
             {
@@ -459,6 +461,16 @@ class Vehicle:
             cp.obstacle = od
         return []
 
+    def _on_ftp(self, msg: Msg) -> list[Msg]:
+        """MAVLink FTP: not modelled; a NAK UnknownCommand at once (``mavlink_ftp``), said once."""
+        if msg.get("target_system", 1) not in (0, mav.SYSTEM_ID):
+            return []
+        if not self._ftp_said:
+            self._ftp_said = True
+            self.text(MavSeverity.WARNING, "MAVLink FTP not supported by the built-in simulator")
+        fields = {"target_network": 0, "target_system": msg.sysid, "target_component": msg.compid}
+        return [Msg("FILE_TRANSFER_PROTOCOL", {**fields, "payload": nak(msg.get("payload", ()))})]
+
     def _on_mission_set_current(self, msg: Msg) -> list[Msg]:
         self.nav.set_current(int(msg.get("seq", 0)), self.time_us / 1e6)
         self.drain_nav_events()
@@ -472,6 +484,7 @@ class Vehicle:
         "SET_MODE": _on_set_mode,
         "TIMESYNC": _on_timesync,
         "MISSION_SET_CURRENT": _on_mission_set_current,
+        "FILE_TRANSFER_PROTOCOL": _on_ftp,
         "OBSTACLE_DISTANCE": _on_obstacle_distance,
         "SET_POSITION_TARGET_LOCAL_NED": lambda self, msg: self.offboard.local_ned(msg),
         "SET_POSITION_TARGET_GLOBAL_INT": lambda self, msg: self.offboard.global_int(msg),

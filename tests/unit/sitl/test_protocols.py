@@ -81,3 +81,32 @@ def test_fence_and_rally_plans_are_stored_apart():
     assert req.name == "MISSION_REQUEST_INT" and req.fields["mission_type"] == 1
     (ack,) = proto.handle(Msg("MISSION_COUNT", {"count": 0, "mission_type": 2}, *GCS), 0, 0) or []
     assert ack.fields["type"] == MissionResult.ACCEPTED and ack.fields["mission_type"] == 2
+
+
+def test_mavlink_ftp_is_refused_at_once_with_a_nak_and_said_once():
+    """Not modelled: every FILE_TRANSFER_PROTOCOL request gets a NAK UnknownCommand (the next
+    sequence number, the request's session and opcode), so MAVProxy falls back to
+    PARAM_REQUEST_LIST at once instead of timing out; one STATUSTEXT says why."""
+    from uavtest.sitl.mavlink_ftp import ERR_UNKNOWN_COMMAND, RSP_NAK
+    from uavtest.sitl.vehicle import SimConfig, Vehicle
+
+    v = Vehicle(SimConfig())
+    open_ro = [7, 0, 3, 4, 31, 0, 0, 0, 0, 0, 0, 0, *b"@PARAM/param.pck?withdefaults=1"]
+    texts: list[str] = []
+    for seq in (7, 8):
+        open_ro[0] = seq
+        fields = {"target_network": 0, "target_system": 1, "target_component": 1, "payload": open_ro}
+        (reply,) = v.receive(Msg("FILE_TRANSFER_PROTOCOL", fields, *GCS))
+        texts += [m.fields["text"] for m in v.drain() if m.name == "STATUSTEXT"]
+        p = reply.fields["payload"]
+        assert reply.name == "FILE_TRANSFER_PROTOCOL" and len(p) == 251
+        assert (p[0] | p[1] << 8, p[2], p[3], p[4], p[5], p[12]) == (
+            seq + 1,
+            3,
+            RSP_NAK,
+            1,
+            4,
+            ERR_UNKNOWN_COMMAND,
+        )
+        assert (reply.fields["target_system"], reply.fields["target_component"]) == GCS
+    assert "".join(texts) == "MAVLink FTP not supported by the built-in simulator"  # 2 chunks, once
