@@ -30,14 +30,9 @@ def px4_binary() -> Path:
     return exe
 
 
-@contextmanager
-def running_px4(workdir: Path, speed: str | None = None) -> Iterator[subprocess.Popen[bytes]]:
-    """PX4 SIH (quadrotor) booted in a fresh ``workdir`` (default parameters) at the default
-    ``world.home``, at ``speed`` (``UAVTEST_PX4_SPEED``, default 10) times real time; stopped with
-    SIGINT (then SIGKILL) on the way out. Its console goes to ``workdir/px4.log``."""
-    exe = px4_binary()
-    rootfs = workdir / "rootfs"
-    rootfs.mkdir(parents=True)
+def px4_command(exe: Path, instance: int = 0, speed: str | None = None) -> tuple[list[str], dict[str, str]]:
+    """The command line and environment of PX4 SIH (quadrotor) instance ``instance`` at the default
+    ``world.home``, at ``speed`` (``UAVTEST_PX4_SPEED``, default 10) times real time."""
     env = {
         **os.environ,
         "PX4_SIM_MODEL": "sihsim_quadx",
@@ -48,9 +43,21 @@ def running_px4(workdir: Path, speed: str | None = None) -> Iterator[subprocess.
         # start where the test's mission is (the default world.home), not at PX4's default place
         **px4_home_env(Home(), int_latlon=sih_latlon_is_int(exe)),
     }
+    return [str(exe), "-i", str(instance), "-d", str(exe.parent.parent / "etc")], env
+
+
+@contextmanager
+def running_px4(workdir: Path, speed: str | None = None) -> Iterator[subprocess.Popen[bytes]]:
+    """PX4 SIH (quadrotor) booted in a fresh ``workdir`` (default parameters) at the default
+    ``world.home``, at ``speed`` (``UAVTEST_PX4_SPEED``, default 10) times real time; stopped with
+    SIGINT (then SIGKILL) on the way out. Its console goes to ``workdir/px4.log``."""
+    exe = px4_binary()
+    rootfs = workdir / "rootfs"
+    rootfs.mkdir(parents=True)
+    argv, env = px4_command(exe, 0, speed)
     log = open(workdir / "px4.log", "wb")  # noqa: SIM115
     proc = subprocess.Popen(
-        [str(exe), "-i", "0", "-d", str(exe.parent.parent / "etc")],
+        argv,
         cwd=rootfs,
         env=env,
         stdin=subprocess.DEVNULL,

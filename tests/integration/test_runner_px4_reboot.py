@@ -8,7 +8,6 @@ instance 9 (MAVLink to 127.0.0.1:14549), so it does not meet another test's inst
 
 from __future__ import annotations
 
-import os
 import re
 import shutil
 import signal
@@ -21,9 +20,8 @@ from typing import IO
 import pytest
 import yaml
 
+from harness.px4_sitl import px4_binary, px4_command
 from uavtest.analysis.models import ReplicaResult, Verdict
-from uavtest.engine.px4home import px4_home_env, sih_latlon_is_int
-from uavtest.spec.models import Home
 
 pytestmark = [pytest.mark.integration, pytest.mark.px4, pytest.mark.slow]
 
@@ -33,27 +31,13 @@ PORT = 14540 + INSTANCE
 
 @pytest.fixture
 def px4_exe() -> Path:
-    binary = os.environ.get("UAVTEST_PX4_BIN")
-    if not binary:
-        pytest.skip("UAVTEST_PX4_BIN is not set (a PX4 v1.15 SITL binary: build/px4_sitl_default/bin/px4)")
-    exe = Path(binary).resolve()
-    if not exe.is_file():
-        pytest.fail(f"UAVTEST_PX4_BIN={binary} is not a file")
-    return exe
+    return px4_binary()
 
 
 def start_px4(exe: Path, rootfs: Path, log: IO[bytes]) -> subprocess.Popen[bytes]:
-    env = {
-        **os.environ,
-        "PX4_SIM_MODEL": "sihsim_quadx",
-        "PX4_SYS_AUTOSTART": "10040",
-        "PX4_SIMULATOR": "sihsim",
-        "PX4_SIM_SPEED_FACTOR": os.environ.get("UAVTEST_PX4_SPEED", "10"),
-        "HEADLESS": "1",
-        **px4_home_env(Home(), int_latlon=sih_latlon_is_int(exe)),
-    }
+    argv, env = px4_command(exe, INSTANCE)
     return subprocess.Popen(
-        [str(exe), "-i", str(INSTANCE), "-d", str(exe.parent.parent / "etc")],
+        argv,
         cwd=rootfs,
         env=env,
         stdin=subprocess.DEVNULL,
