@@ -46,6 +46,17 @@ def px4_command(exe: Path, instance: int = 0, speed: str | None = None) -> tuple
     return [str(exe), "-i", str(instance), "-d", str(exe.parent.parent / "etc")], env
 
 
+def stop_px4(proc: subprocess.Popen[bytes]) -> None:
+    """SIGINT (PX4's shell stops its modules and closes its log), then SIGKILL after 15 s."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(15)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(5)
+
+
 @contextmanager
 def running_px4(workdir: Path, speed: str | None = None) -> Iterator[subprocess.Popen[bytes]]:
     """PX4 SIH (quadrotor) booted in a fresh ``workdir`` (default parameters) at the default
@@ -67,12 +78,6 @@ def running_px4(workdir: Path, speed: str | None = None) -> Iterator[subprocess.
     try:
         yield proc
     finally:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(15)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(5)
+        stop_px4(proc)
         log.close()
         shutil.rmtree(rootfs, ignore_errors=True)

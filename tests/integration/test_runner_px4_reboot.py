@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import re
 import shutil
-import signal
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -20,7 +19,7 @@ from typing import IO
 import pytest
 import yaml
 
-from harness.px4_sitl import px4_binary, px4_command
+from harness.px4_sitl import px4_binary, px4_command, stop_px4
 from uavtest.analysis.models import ReplicaResult, Verdict
 
 pytestmark = [pytest.mark.integration, pytest.mark.px4, pytest.mark.slow]
@@ -52,16 +51,6 @@ def rootfs(tmp_path: Path) -> Iterator[Path]:
     path.mkdir()
     yield path
     shutil.rmtree(path, ignore_errors=True)
-
-
-def stop(proc: subprocess.Popen[bytes]) -> None:
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(5)
 
 
 def test_px4_restarted_mid_flight_is_an_error_not_a_verdict(
@@ -100,7 +89,7 @@ def test_px4_restarted_mid_flight_is_an_error_not_a_verdict(
         out, err = runner.communicate(timeout=600)
     finally:
         for proc in (runner, *sims):
-            stop(proc)  # type: ignore[arg-type]
+            stop_px4(proc)  # type: ignore[arg-type]
         for f in logs:
             f.close()
     stderr = "".join(seen) + err
