@@ -10,6 +10,7 @@ import subprocess
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import IO
 
 import pytest
 
@@ -46,6 +47,16 @@ def px4_command(exe: Path, instance: int = 0, speed: str | None = None) -> tuple
     return [str(exe), "-i", str(instance), "-d", str(exe.parent.parent / "etc")], env
 
 
+def start_px4(
+    exe: Path, rootfs: Path, log: IO[bytes], instance: int = 0, speed: str | None = None
+) -> subprocess.Popen[bytes]:
+    """PX4 SIH instance ``instance`` started in ``rootfs`` (``px4_command``), its console to ``log``."""
+    argv, env = px4_command(exe, instance, speed)
+    return subprocess.Popen(
+        argv, cwd=rootfs, env=env, stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT
+    )
+
+
 def stop_px4(proc: subprocess.Popen[bytes]) -> None:
     """SIGINT (PX4's shell stops its modules and closes its log), then SIGKILL after 15 s."""
     if proc.poll() is None:
@@ -65,16 +76,8 @@ def running_px4(workdir: Path, speed: str | None = None) -> Iterator[subprocess.
     exe = px4_binary()
     rootfs = workdir / "rootfs"
     rootfs.mkdir(parents=True)
-    argv, env = px4_command(exe, 0, speed)
     log = open(workdir / "px4.log", "wb")  # noqa: SIM115
-    proc = subprocess.Popen(
-        argv,
-        cwd=rootfs,
-        env=env,
-        stdin=subprocess.DEVNULL,
-        stdout=log,
-        stderr=subprocess.STDOUT,
-    )
+    proc = start_px4(exe, rootfs, log, speed=speed)
     try:
         yield proc
     finally:

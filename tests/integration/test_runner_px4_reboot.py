@@ -14,12 +14,11 @@ import subprocess
 import sys
 from collections.abc import Iterator
 from pathlib import Path
-from typing import IO
 
 import pytest
 import yaml
 
-from harness.px4_sitl import px4_binary, px4_command, stop_px4
+from harness.px4_sitl import px4_binary, start_px4, stop_px4
 from uavtest.analysis.models import ReplicaResult, Verdict
 
 pytestmark = [pytest.mark.integration, pytest.mark.px4, pytest.mark.slow]
@@ -31,18 +30,6 @@ PORT = 14540 + INSTANCE
 @pytest.fixture
 def px4_exe() -> Path:
     return px4_binary()
-
-
-def start_px4(exe: Path, rootfs: Path, log: IO[bytes]) -> subprocess.Popen[bytes]:
-    argv, env = px4_command(exe, INSTANCE)
-    return subprocess.Popen(
-        argv,
-        cwd=rootfs,
-        env=env,
-        stdin=subprocess.DEVNULL,
-        stdout=log,
-        stderr=subprocess.STDOUT,
-    )
 
 
 @pytest.fixture
@@ -73,7 +60,7 @@ def test_px4_restarted_mid_flight_is_an_error_not_a_verdict(
     cmd = [sys.executable, "-m", "uavtest.cli", "runner", "--test", str(test), "--store", str(store)]
     cmd += ["--run-id", "px4", "--connect", f"udpin:127.0.0.1:{PORT}", "--connect-timeout", "60"]
     logs = [open(tmp_path / f"px4-{n}.log", "wb") for n in ("first", "second")]  # noqa: SIM115
-    sims = [start_px4(px4_exe, rootfs, logs[0])]
+    sims = [start_px4(px4_exe, rootfs, logs[0], INSTANCE)]
     runner = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         assert runner.stderr is not None
@@ -83,7 +70,7 @@ def test_px4_restarted_mid_flight_is_an_error_not_a_verdict(
             if re.search(r"vehicle \d+/\d+: .*, armed$", line.rstrip()):
                 sims[0].kill()
                 sims[0].wait(10)
-                sims.append(start_px4(px4_exe, rootfs, logs[1]))
+                sims.append(start_px4(px4_exe, rootfs, logs[1], INSTANCE))
                 break
         assert len(sims) == 2, "PX4 never armed:\n" + "".join(seen)[-4000:]
         out, err = runner.communicate(timeout=600)

@@ -735,8 +735,9 @@ class CommandScheduler:
                 if wait is not None:
                     given = self.arm_give_up_ms / 1000
                     log.warning("vehicle not settled after %g s; sending %s anyway", given, step.label)
-                self.settle_wait_ms += now_ms - self._waiting_since_ms
-                self._shift(now_ms - self._waiting_since_ms, now_ms, f"{step.label} waited to arm")
+                waited = now_ms - self._waiting_since_ms
+                self.settle_wait_ms += waited
+                self._shift(waited, now_ms, f"{step.label} waited to arm")
                 self._waiting_since_ms = None
                 self._retry_at_ms = None
                 return self._send(step, now_ms, wall)

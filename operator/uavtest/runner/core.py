@@ -512,7 +512,7 @@ class ReplicaCore:
             if not rep.armed_ever:
                 why = f"timeout: the vehicle never armed in {self.cfg.timeout_s:g} s of vehicle time"
                 return out + self._settle(Ending.ERROR, wall, error=why)
-            waited = self.scheduler.settle_wait_ms / 1000
+            waited = self.scheduler.settle_waited_ms(now) / 1000
             extra = f" (and {waited:.1f} s waiting for the vehicle to settle before arming)" if waited else ""
             rep.notes.append(f"timeout after {self.cfg.timeout_s:g} s of vehicle time{extra}")
             return out + self._settle(Ending.TIMEOUT, wall)

@@ -108,7 +108,7 @@ def _mission_start(v: Vehicle, c: VehicleCommand, extra: list[Msg]) -> MavResult
     valid mission") or a first item out of range; else the mode changes to Mission and the
     vehicle arms, both or TEMPORARILY_REJECTED ("Switching to Mission is currently not
     available")."""
-    if not v.nav.mission or not v.nav.mission_valid:
+    if not v.nav.mission_valid:  # a mission loaded and feasible
         v.text(MavSeverity.CRITICAL, "Mission start denied! No valid mission")
         return MavResult.DENIED
     first = int(c.param1) if math.isfinite(c.param1) else 0
