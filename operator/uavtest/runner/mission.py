@@ -37,7 +37,7 @@ def wire_items(items: Sequence[MissionItem], home: Home) -> list[MissionItemInt]
     """MISSION_ITEM_INTs for the mission items (global coordinates, altitude relative to home).
 
     An item without a position (e.g. a land item written without one) takes the previous item's;
-    yaw is NaN (PX4: keep the heading the navigator picks).
+    param4 is the item's heading in degrees, NaN without one (PX4: MPC_YAW_MODE picks it).
     """
     out: list[MissionItemInt] = []
     lat, lon, alt = home.lat, home.lon, 0.0
@@ -47,20 +47,21 @@ def wire_items(items: Sequence[MissionItem], home: Home) -> list[MissionItemInt]
         alt = item.alt if item.alt is not None else alt
         x, y = round(lat * 1e7), round(lon * 1e7)
         kind = item.kind
+        yaw = item.yaw if item.yaw is not None else _NAN
         if kind is MissionItemKind.TAKEOFF:
             wire = MissionItemInt(
-                seq, FRAME_GLOBAL_RELATIVE_ALT_INT, Cmd.NAV_TAKEOFF, 0, 0, 0, _NAN, x, y, alt
+                seq, FRAME_GLOBAL_RELATIVE_ALT_INT, Cmd.NAV_TAKEOFF, 0, 0, 0, yaw, x, y, alt
             )
         elif kind is MissionItemKind.WAYPOINT:
             wire = MissionItemInt(
-                seq, FRAME_GLOBAL_RELATIVE_ALT_INT, Cmd.NAV_WAYPOINT, item.hold, 0, 0, _NAN, x, y, alt
+                seq, FRAME_GLOBAL_RELATIVE_ALT_INT, Cmd.NAV_WAYPOINT, item.hold, 0, 0, yaw, x, y, alt
             )
         elif kind is MissionItemKind.LOITER_TIME:
             wire = MissionItemInt(
-                seq, FRAME_GLOBAL_RELATIVE_ALT_INT, Cmd.NAV_LOITER_TIME, item.hold, 0, 0, _NAN, x, y, alt
+                seq, FRAME_GLOBAL_RELATIVE_ALT_INT, Cmd.NAV_LOITER_TIME, item.hold, 0, 0, yaw, x, y, alt
             )
         elif kind is MissionItemKind.LAND:
-            wire = MissionItemInt(seq, FRAME_GLOBAL_RELATIVE_ALT_INT, Cmd.NAV_LAND, 0, 0, 0, _NAN, x, y, 0.0)
+            wire = MissionItemInt(seq, FRAME_GLOBAL_RELATIVE_ALT_INT, Cmd.NAV_LAND, 0, 0, 0, yaw, x, y, 0.0)
         elif kind is MissionItemKind.RETURN:
             wire = MissionItemInt(seq, FRAME_MISSION, Cmd.NAV_RETURN_TO_LAUNCH)
         elif kind is MissionItemKind.LAND_START:

@@ -107,14 +107,19 @@ def from_spec(items: Sequence[MissionItem]) -> list[NavItem]:
         lat = round(item.lat * 1e7) if item.lat is not None else 0
         lon = round(item.lon * 1e7) if item.lon is not None else 0
         alt = item.alt if item.alt is not None else 0.0
+        yaw = item.yaw if item.yaw is not None else math.nan  # param4: heading, degrees
         if item.kind == MissionItemKind.TAKEOFF:
-            out.append(NavItem(seq, MavCmd.NAV_TAKEOFF, rel, x=lat, y=lon, z=alt))
+            out.append(NavItem(seq, MavCmd.NAV_TAKEOFF, rel, param4=yaw, x=lat, y=lon, z=alt))
         elif item.kind == MissionItemKind.WAYPOINT:
-            out.append(NavItem(seq, MavCmd.NAV_WAYPOINT, rel, param1=item.hold, x=lat, y=lon, z=alt))
+            out.append(
+                NavItem(seq, MavCmd.NAV_WAYPOINT, rel, param1=item.hold, param4=yaw, x=lat, y=lon, z=alt)
+            )
         elif item.kind == MissionItemKind.LOITER_TIME:
-            out.append(NavItem(seq, MavCmd.NAV_LOITER_TIME, rel, param1=item.hold, x=lat, y=lon, z=alt))
+            out.append(
+                NavItem(seq, MavCmd.NAV_LOITER_TIME, rel, param1=item.hold, param4=yaw, x=lat, y=lon, z=alt)
+            )
         elif item.kind == MissionItemKind.LAND:
-            out.append(NavItem(seq, MavCmd.NAV_LAND, rel, x=lat, y=lon, z=alt))
+            out.append(NavItem(seq, MavCmd.NAV_LAND, rel, param4=yaw, x=lat, y=lon, z=alt))
         elif item.kind == MissionItemKind.RETURN:
             out.append(NavItem(seq, MavCmd.NAV_RETURN_TO_LAUNCH, MavFrame.MISSION))
         elif item.kind == MissionItemKind.CHANGE_SPEED:

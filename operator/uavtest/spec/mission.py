@@ -35,7 +35,9 @@ def mission_items(spec: UavTestSpec) -> list[MissionItem]:
         for wp in mission.waypoints:
             lat, lon = ned_to_geodetic(wp.x, wp.y, home.lat, home.lon)
             items.append(
-                MissionItem(kind=MissionItemKind.WAYPOINT, lat=lat, lon=lon, alt=-wp.z, hold=wp.hold)
+                MissionItem(
+                    kind=MissionItemKind.WAYPOINT, lat=lat, lon=lon, alt=-wp.z, hold=wp.hold, yaw=wp.yaw
+                )
             )
         if mission.land:
             last = items[-1]

@@ -260,6 +260,11 @@ class MissionItem(Model):
     alt: Altitude | None = Field(None, description="metres above home")
     hold: NonNegativeDuration = Field(0.0, description="hold / loiter time at the item, seconds")
     speed: Speed | None = Field(None, description="changeSpeed: ground speed m/s")
+    yaw: Degrees | None = Field(
+        None,
+        description="takeoff, waypoint, loiterTime, land: heading, degrees clockwise from North "
+        "(param4); none: PX4's MPC_YAW_MODE",
+    )
 
 
 class Waypoint(Model):
@@ -269,6 +274,11 @@ class Waypoint(Model):
     y: Local = Field(description="East, metres")
     z: Down = Field(description="Down, metres; negative is up")
     hold: NonNegativeDuration = Field(0.0, description="seconds to hold at the waypoint")
+    yaw: Degrees | None = Field(
+        None,
+        description="heading on the way to and at the waypoint, degrees clockwise from North "
+        "(MAV_CMD_NAV_WAYPOINT param4); default: PX4's MPC_YAW_MODE (0: face the waypoint)",
+    )
 
 
 class Mission(Model):

@@ -327,7 +327,18 @@ def _item(
             value=alt,
             allowed=f"metres above home >= {ALTITUDE_MIN:g} and <= {ALTITUDE_MAX:g}",
         )
+    # param4 of takeoff, waypoint, loiter-time and land is the heading in degrees (PX4's
+    # mavlink_mission.cpp reads it as yaw for each); QGC writes null for "no heading"
+    yaw = _param(params, 3)
+    if yaw is not None and not -360 <= yaw <= 360:
+        raise BadInput(
+            "heading out of range",
+            file=source,
+            field=f"{field}.params[3]",
+            value=yaw,
+            allowed="degrees clockwise from North, -360..360, or null (PX4's MPC_YAW_MODE)",
+        )
     try:
-        return MissionItem(kind=kind, lat=lat, lon=lon, alt=alt, hold=hold)
+        return MissionItem(kind=kind, lat=lat, lon=lon, alt=alt, hold=hold, yaw=yaw)
     except ValidationError as e:  # a safety net: the checks above name the params index
         raise bad_input_from(e, source=source, root=MissionItem, prefix=field) from None

@@ -35,6 +35,20 @@ def test_wire_items_use_global_int_coordinates_and_relative_altitude() -> None:
     assert wire[3].param2 == 4 and wire[3].frame == 2
 
 
+def test_an_items_heading_goes_out_in_param4_in_degrees() -> None:
+    # PX4's mavlink_mission.cpp reads param4 of takeoff, waypoint, loiter-time and land as the
+    # heading in degrees (wrap_2pi(radians(param4))); NaN leaves it to MPC_YAW_MODE
+    items = [
+        MissionItem(kind=MissionItemKind.TAKEOFF, lat=HOME.lat, lon=HOME.lon, alt=10, yaw=45),
+        MissionItem(kind=MissionItemKind.WAYPOINT, lat=47.3979, lon=8.5457, alt=12, yaw=270),
+        MissionItem(kind=MissionItemKind.LOITER_TIME, lat=47.3979, lon=8.5457, alt=12, hold=2, yaw=-90),
+        MissionItem(kind=MissionItemKind.LAND, yaw=0),
+        MissionItem(kind=MissionItemKind.LAND),
+    ]
+    assert [w.param4 for w in wire_items(items, HOME)[:4]] == [45, 270, -90, 0]
+    assert math.isnan(wire_items(items, HOME)[4].param4)
+
+
 def test_upload_answers_each_request_and_ends_on_accepted() -> None:
     up = MissionUploader(_items(3))
     assert up.start(0.0) == [MissionCount(3)]

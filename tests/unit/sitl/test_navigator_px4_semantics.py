@@ -17,12 +17,13 @@ from uavtest.sitl.geo import Projection
 from uavtest.sitl.inprocess import _command
 from uavtest.sitl.mav import MavCmd, MavFrame, MavSeverity
 from uavtest.sitl.mc_pos_control import GoalKind
-from uavtest.sitl.mission import NavItem
+from uavtest.sitl.mission import NavItem, from_spec
 from uavtest.sitl.navigator import Event, EventKind, Navigator, State
 from uavtest.sitl.navigator.navigator_main import braking_distance
 from uavtest.sitl.params import ParamStore
 from uavtest.sitl.vehicle import SimConfig, Vehicle
-from uavtest.spec.models import Home
+from uavtest.spec.mission import mission_items
+from uavtest.spec.models import Home, UavTestSpec
 
 HOME = Home()
 PROJ = Projection(HOME.lat, HOME.lon)
@@ -130,6 +131,26 @@ def test_a_waypoint_is_flown_to_facing_its_heading():
     run(nav, st, 0.0, 0.1)
     assert nav.current == 1
     assert nav.update(st, 0.2).yaw == pytest.approx(-math.pi / 2)
+
+
+@pytest.mark.parametrize(("yaw", "facing"), [(None, 0.0), (90.0, 90.0), (-135.0, -135.0)])
+def test_a_test_files_waypoint_heading_is_flown(yaw: float | None, facing: float):
+    """``mission.waypoints[].yaw`` goes to the vehicle as param4 (degrees, as QGC and PX4 read
+    it): the vehicle holds at the waypoint facing it; without one it faces the waypoint it flew
+    to (MPC_YAW_MODE 0), here North."""
+    wp: dict[str, float] = {"x": 20.0, "y": 0.0, "z": -5.0, "hold": 20.0}
+    if yaw is not None:
+        wp["yaw"] = yaw
+    spec = UavTestSpec.model_validate({"mission": {"takeoffAltitude": 5, "waypoints": [wp], "land": False}})
+    v = Vehicle(dataclasses.replace(SimConfig.from_spec(spec, 1), links=()), None)
+    v.load_mission(from_spec(mission_items(spec)))
+    v.fly_until(lambda v: v.ready, 10_000_000)
+    assert _command(v, MavCmd.COMPONENT_ARM_DISARM, 1.0) == 0
+    _command(v, MavCmd.DO_SET_MODE, 1.0, float(MainMode.AUTO), float(AutoSubMode.MISSION))
+    v.fly_until(lambda v: math.hypot(v.st.x - 20.0, v.st.y) < 0.5 and -v.st.z > 4.5, 40_000_000)
+    v.fly_until(lambda v: False, 8_000_000)
+    heading = math.degrees(v.st.yaw)
+    assert abs((heading - facing + 180.0) % 360.0 - 180.0) < 5.0, heading
 
 
 # ---------------------------------------------------------------- 2. the takeoff item's position

@@ -93,6 +93,21 @@ def test_plan_items_and_home(square_plan: dict[str, Any]) -> None:
     assert home is not None and (home.lat, home.lon, home.alt) == (47.3977419, 8.5455938, 488.0)
 
 
+def test_a_plan_items_heading_is_kept_and_null_means_none(square_plan: dict[str, Any]) -> None:
+    # QGC writes an item's heading in params[3], degrees; null: "no heading" (MPC_YAW_MODE)
+    square_plan["mission"]["items"][2]["params"][3] = 270
+    items = parse_plan(square_plan, "s.plan", home_alt=488.0)
+    assert items[1].kind == MissionItemKind.WAYPOINT and items[1].yaw == 270
+    assert items[0].yaw is None  # the takeoff's params[3] is null
+
+
+def test_a_plan_heading_out_of_range_names_params_3(square_plan: dict[str, Any]) -> None:
+    square_plan["mission"]["items"][2]["params"][3] = 400
+    with pytest.raises(BadInput, match="heading out of range") as e:
+        parse_plan(square_plan, "s.plan", home_alt=488.0)
+    assert e.value.field == "mission.items[2].params[3]" and e.value.value == 400
+
+
 def test_plan_amsl_frame_is_made_relative(square_plan: dict[str, Any]) -> None:
     square_plan["mission"]["items"][2].update(frame=0, params=[0, 0, 0, None, 47.398, 8.5456, 503.0])
     items = parse_plan(square_plan, "s.plan", home_alt=488.0)
