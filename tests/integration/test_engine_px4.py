@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 import yaml
 from pyulog import ULog
@@ -171,3 +172,56 @@ def test_a_px4_on_the_ground_at_another_altitude_flies_with_a_warning(
     (warning,) = [w for w in result.warnings if w.startswith("home altitude mismatch")]
     # SIH's default ground, 32.34 m, and the estimator's fraction of a metre above it
     assert re.search(r"home is at 3[23] m AMSL, the test's world.home at 488 m \(-45[56] m\)", warning)
+
+
+def _hold_heading(ulog: Path, north: float, east: float) -> float:
+    """The median heading (degrees) from 3 to 8 s after the vehicle first came within 1 m of the
+    point, in the air."""
+    lp = ULog(str(ulog), ["vehicle_local_position"]).get_dataset("vehicle_local_position").data
+    t = lp["timestamp"] / 1e6
+    z = lp["z"]
+    near = np.flatnonzero((np.hypot(lp["x"] - north, lp["y"] - east) < 1.0) & (z < z.max() - 2.0))
+    assert len(near), "the vehicle never reached the waypoint"
+    hold = (t > t[near[0]] + 3.0) & (t < t[near[0]] + 8.0)
+    return float(np.degrees(np.median(np.unwrap(lp["heading"][hold]))))
+
+
+def test_a_waypoint_heading_reaches_px4_in_degrees(px4_bin: Path, tmp_path: Path) -> None:
+    """``mission.waypoints[].yaw`` is MAV_CMD_NAV_WAYPOINT's param4 in degrees: PX4 holds the
+    waypoint facing East, across the northward leg it flew (MPC_YAW_MODE 0 would face North)."""
+    doc = {
+        "apiVersion": "uavtest.io/v1alpha1",
+        "kind": "UavTest",
+        "metadata": {"name": "px4-heading"},
+        "spec": {
+            "timeout": 300,
+            "vehicle": {"simulator": "px4"},
+            "mission": {
+                "takeoffAltitude": 5,
+                "waypoints": [{"x": 15, "y": 0, "z": -5, "hold": 10, "yaw": 90}],
+            },
+            "commands": [{"at": 1, "action": "mode", "mode": "mission"}],
+        },
+    }
+    test = tmp_path / "heading.yaml"
+    test.write_text(yaml.safe_dump(doc))
+    out = tmp_path / "runs"
+    summary, _ = uavtest_run(test, out, "--replicas", "1")
+    assert summary["passed"] == 1, [r["reason"] for r in summary["results"]]
+    [replica] = replica_dirs(out)
+    assert _hold_heading(replica / "flight.ulg", 15.0, 0.0) == pytest.approx(90.0, abs=8.0)
+
+
+def test_the_geofence_example_passes_on_px4_as_on_the_builtin_vehicle(
+    px4_bin: Path, repo_root: Path, tmp_path: Path
+) -> None:
+    """examples/geofence-return.yaml: the pilot's forward stick after the waypoint (faced North by
+    its yaw) crosses the 50 m fence, PX4 returns and lands inside the box."""
+    test = tmp_path / "geofence-px4.yaml"
+    text = (repo_root / "examples/geofence-return.yaml").read_text()
+    test.write_text(text.replace("  vehicle:\n", "  vehicle:\n    simulator: px4\n"))
+    out = tmp_path / "runs"
+    summary, _ = uavtest_run(test, out, "--replicas", "1")
+    assert summary["passed"] == 1, [r["reason"] for r in summary["results"]]
+    [replica] = replica_dirs(out)
+    assert abs(_hold_heading(replica / "flight.ulg", 30.0, 0.0)) < 8.0
