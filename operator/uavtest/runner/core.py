@@ -23,6 +23,7 @@ from enum import StrEnum
 
 from uavtest.runner.commands import CommandScheduler, FaultRecord, Refusal, StepKind, disarm_command
 from uavtest.runner.events import (
+    Attitude,
     CommandAck,
     ExtendedSysState,
     GcsHeartbeat,
@@ -50,12 +51,13 @@ from uavtest.runner.home import check_home
 from uavtest.runner.logdownload import LogDownloader
 from uavtest.runner.mission import MissionUploader
 from uavtest.runner.monitor import FlightMonitor
+from uavtest.runner.obstacle_distance import ObstacleDistanceFeed
 from uavtest.runner.params import ParamSetter
 from uavtest.runner.progress import ProgressWatch
 from uavtest.runner.px4 import AckResult, Autopilot, Cmd, LandedState, MavType, mode_name, result_name
 from uavtest.runner.reboot import JITTER_MS, clock_went_back, reboot_reason
 from uavtest.runner.streams import stream_requests
-from uavtest.spec.models import Command, Fault, FlightMode, Geofence, Home, Obstacle
+from uavtest.spec.models import Command, Fault, FlightMode, Geofence, Home, Obstacle, RangeSensor
 
 __all__ = ["ARM_GRACE_MS", "CoreConfig", "Ending", "FlightReport", "ReplicaCore", "Stage"]
 
@@ -113,6 +115,9 @@ class CoreConfig:
     arm_settle_s: float = 0.0  # vehicle seconds ready-to-arm before arming (0: arm when due)
     download_log: bool = False  # stage 6 over MAVLink (PX4 without a shared log directory)
     simulator: str | None = None  # "builtin" / "px4" / None (unknown vehicle): wording of UNSUPPORTED
+    #: a scanning range sensor the runner simulates for the vehicle, sending its OBSTACLE_DISTANCE
+    #: (PX4 SITL, whose SIH has none: ``uavtest.runner.obstacle_distance``); None: the vehicle's own
+    range_sensor: RangeSensor | None = None
 
 
 @dataclass(slots=True)
@@ -174,6 +179,9 @@ class ReplicaCore:
             simulator=config.simulator,
         )
         self.downloader = LogDownloader(retry_s=config.retry_s)
+        self.obstacle_feed = (
+            ObstacleDistanceFeed(config.range_sensor, config.obstacles) if config.range_sensor else None
+        )
         self._have_local = False
         self._have_global = False
         self._waiting_at: int | None = None  # a lockstep announce not yet granted
@@ -215,6 +223,10 @@ class ReplicaCore:
             return self._on_announce(msg, wall)
         if isinstance(msg, Heartbeat):
             return self._on_heartbeat(msg, wall)
+        if isinstance(msg, Attitude):
+            if self.obstacle_feed is not None:
+                self.obstacle_feed.on_attitude(msg.yaw)
+            return []
         if isinstance(msg, GlobalPosition | VehicleTime):
             if msg.time_ms > self.now_ms:
                 self.now_ms = msg.time_ms
@@ -298,17 +310,22 @@ class ReplicaCore:
             self.now_ms = p.time_ms
         elif p.time_ms < self.now_ms - JITTER_MS and self.stage in _REBOOT_WATCHED:
             return self._rebooted(p.time_ms, wall)
+        out: list[Outgoing] = []
+        if self.obstacle_feed is not None and self.stage is not Stage.DONE:
+            scan = self.obstacle_feed.on_position(p.time_ms, p.x, p.y, p.z)
+            if scan is not None:
+                out.append(scan)
         if self.stage is Stage.FLIGHT:
             self.monitor.on_position(p)
             flying = self._in_mission and self.armed and self.monitor.airborne
             self.progress.on_position(p.x, p.y, p.z, p.time_ms, flying)
             if not self.lockstep:
-                return self._flight_step(wall)
-            return []
+                return out + self._flight_step(wall)
+            return out
         if not self._have_local:
             self._have_local = True
-            return self._advance(wall)
-        return []
+            return out + self._advance(wall)
+        return out
 
     def _on_heartbeat(self, hb: Heartbeat, wall: float) -> list[Outgoing]:
         if hb.autopilot == Autopilot.INVALID or hb.type in (MavType.GCS, MavType.ONBOARD_CONTROLLER):
@@ -428,7 +445,7 @@ class ReplicaCore:
                     return out
                 log.info("connected at vehicle time %.2f s", self.now_ms / 1000)
                 self.stage = Stage.PARAMS
-                out += stream_requests()
+                out += stream_requests(attitude=self.obstacle_feed is not None)
                 out += self.params.start(wall)
             elif stage is Stage.PARAMS:
                 if not self.params.done:

@@ -13,6 +13,7 @@ from uavtest.mavlink_numbers import SYS_STATUS_PREARM_CHECK
 
 __all__ = [
     "ARMED_FLAG",
+    "Attitude",
     "CommandAck",
     "CommandInt",
     "CommandLong",
@@ -37,6 +38,7 @@ __all__ = [
     "MissionItemInt",
     "MissionItemReached",
     "MissionRequest",
+    "ObstacleDistance",
     "Outgoing",
     "ParamRequestRead",
     "ParamSet",
@@ -77,6 +79,15 @@ class LocalPosition:
     x: float
     y: float
     z: float
+
+
+@dataclass(frozen=True, slots=True)
+class Attitude:
+    """ATTITUDE, reduced to the heading (rad, clockwise from North): read only while the runner
+    sends a scanning range sensor's OBSTACLE_DISTANCE (``uavtest.runner.obstacle_distance``)."""
+
+    time_ms: int
+    yaw: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -192,6 +203,7 @@ class LogData:
 Incoming = (
     Heartbeat
     | LocalPosition
+    | Attitude
     | GlobalPosition
     | HomePosition
     | VehicleTime
@@ -357,6 +369,21 @@ class ManualControl:
 
 
 @dataclass(frozen=True, slots=True)
+class ObstacleDistance:
+    """OBSTACLE_DISTANCE: a scan of ``len(distances)`` bins (cm; UINT16_MAX no data, max + 1
+    nothing in range) of ``increment`` degrees from ``angle_offset``, in ``frame``."""
+
+    time_usec: int
+    distances: tuple[int, ...]
+    min_cm: int
+    max_cm: int
+    increment: float
+    angle_offset: float
+    frame: int
+    sensor_type: int = 0  # MAV_DISTANCE_SENSOR_LASER
+
+
+@dataclass(frozen=True, slots=True)
 class LockstepGrant:
     """NAMED_VALUE_INT "LOCKSTEP": simulate from ``seen_ms`` up to ``until_ms``."""
 
@@ -395,6 +422,7 @@ Outgoing = (
     | CommandLong
     | CommandInt
     | ManualControl
+    | ObstacleDistance
     | PositionTargetLocal
     | PositionTargetGlobal
     | LockstepGrant

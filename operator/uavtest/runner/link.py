@@ -25,6 +25,7 @@ from pymavlink.generator import mavcrc
 from uavtest.errors import BadInput, InfrastructureError
 from uavtest.mavlink_numbers import MavFrame
 from uavtest.runner.events import (
+    Attitude,
     CommandAck,
     CommandInt,
     CommandLong,
@@ -48,6 +49,7 @@ from uavtest.runner.events import (
     MissionItemInt,
     MissionItemReached,
     MissionRequest,
+    ObstacleDistance,
     Outgoing,
     ParamRequestRead,
     ParamSet,
@@ -130,6 +132,7 @@ def _fast(
 #: several times more)
 _FAST: dict[int, tuple[Any, int, int, Callable[..., Any]]] = {
     32: _fast(mavlink2.MAVLink_local_position_ned_message, lambda f: LocalPosition(f[0], f[1], f[2], f[3])),
+    30: _fast(mavlink2.MAVLink_attitude_message, lambda f: Attitude(f[0], f[3])),  # time_boot_ms, yaw
     33: _fast(mavlink2.MAVLink_global_position_int_message, lambda f: GlobalPosition(f[0], f[1], f[2], f[4])),
     1: _fast(mavlink2.MAVLink_sys_status_message, lambda f: SysStatus(f[2])),  # sensors health
     252: _fast(
@@ -214,6 +217,11 @@ class MavlinkCodec:
             m = mav.named_value_int_encode(msg.seen_ms, LOCKSTEP_NAME.encode(), msg.until_ms)
         elif isinstance(msg, ManualControl):
             m = mav.manual_control_encode(ts, msg.x, msg.y, msg.z, msg.r, 0)
+        elif isinstance(msg, ObstacleDistance):
+            m = mav.obstacle_distance_encode(
+                msg.time_usec, msg.sensor_type, list(msg.distances), round(msg.increment),
+                msg.min_cm, msg.max_cm, msg.increment, msg.angle_offset, msg.frame,
+            )  # fmt: skip
         elif isinstance(msg, GcsHeartbeat):
             m = mav.heartbeat_encode(6, 8, 0, 0, 4)  # MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID, MAV_STATE_ACTIVE
         elif isinstance(msg, CommandLong):

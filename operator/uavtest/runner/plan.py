@@ -7,6 +7,7 @@ import logging
 from uavtest.runner.core import CoreConfig
 from uavtest.runner.grants import DEFAULT_STEP_MS
 from uavtest.runner.mission import wire_items
+from uavtest.spec.collision_prevention import range_sensor_of
 from uavtest.spec.commands import resolved_commands
 from uavtest.spec.mission import mission_items
 from uavtest.spec.models import Command, CommandAction, FlightMode, Simulator, UavTestSpec
@@ -67,6 +68,8 @@ def plan_flight(
         download_log=download_log,
         arm_settle_s=arm_settle_s if arm_settle_s is not None else default_arm_settle(spec),
         simulator=spec.vehicle.simulator.value,
+        # PX4 SITL (SIH) has no range sensor: the runner sends its scans (the built-in has its own)
+        range_sensor=range_sensor_of(spec) if spec.vehicle.simulator is Simulator.PX4 else None,
     )
 
 

@@ -8,7 +8,8 @@ answers of the protocols it runs; the flight itself is judged from the ULog. So 
 it stops the streams it never reads and slows GLOBAL_POSITION_INT, on PX4 and on the built-in
 simulator alike: less work for both, the same flight. The requests are sent once and not
 awaited: a vehicle that refuses one (an older PX4 without that stream) flies the same, only
-with more telemetry.
+with more telemetry. A runner that sends PX4 a range sensor's scans (``uavtest.runner.obstacle_distance``)
+keeps ATTITUDE, at ``ATTITUDE_INTERVAL_US``, for the heading its scans turn with.
 """
 
 from __future__ import annotations
@@ -16,9 +17,10 @@ from __future__ import annotations
 from uavtest.mavlink_numbers import MavCmd
 from uavtest.runner.events import CommandLong
 
-__all__ = ["STREAM_INTERVALS_US", "stream_requests"]
+__all__ = ["ATTITUDE_INTERVAL_US", "STREAM_INTERVALS_US", "stream_requests"]
 
 OFF = -1.0
+ATTITUDE_INTERVAL_US = 20_000.0  # 50 Hz of vehicle time: the heading of a 10-50 Hz scan
 
 #: message id → interval in µs (-1: stop the stream), per MAV_CMD_SET_MESSAGE_INTERVAL
 STREAM_INTERVALS_US: dict[int, float] = {
@@ -36,9 +38,13 @@ STREAM_INTERVALS_US: dict[int, float] = {
 }
 
 
-def stream_requests() -> list[CommandLong]:
-    """One SET_MESSAGE_INTERVAL per stream in ``STREAM_INTERVALS_US``."""
+def stream_requests(*, attitude: bool = False) -> list[CommandLong]:
+    """One SET_MESSAGE_INTERVAL per stream in ``STREAM_INTERVALS_US``; ``attitude`` keeps ATTITUDE
+    (id 30) at ``ATTITUDE_INTERVAL_US``."""
+    intervals = dict(STREAM_INTERVALS_US)
+    if attitude:
+        intervals[30] = ATTITUDE_INTERVAL_US
     return [
         CommandLong(MavCmd.SET_MESSAGE_INTERVAL, (float(msg_id), interval, 0.0, 0.0, 0.0, 0.0, 0.0))
-        for msg_id, interval in STREAM_INTERVALS_US.items()
+        for msg_id, interval in intervals.items()
     ]

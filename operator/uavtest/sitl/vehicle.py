@@ -74,6 +74,7 @@ from uavtest.sitl.simulator_sih import (
 )
 from uavtest.sitl.telemetry import MODES, ONBOARD, Schedule
 from uavtest.sitl.ulog_writer import LOG_LEVEL
+from uavtest.spec.collision_prevention import range_sensor_of
 from uavtest.spec.models import Avoidance, Home, Obstacle, RangeSensor, UavTestSpec, Wind
 
 __all__ = ["STEP_US", "SimConfig", "Vehicle"]
@@ -131,14 +132,6 @@ class SimConfig:
             avoidance=spec.vehicle.avoidance,
             range_sensor=range_sensor_of(spec),
         )
-
-
-def range_sensor_of(spec: UavTestSpec) -> RangeSensor | None:
-    """The test's range sensor: ``vehicle.rangeSensor``, or its defaults with collision-prevention."""
-    v = spec.vehicle
-    if v.range_sensor is None and v.avoidance is Avoidance.COLLISION_PREVENTION:
-        return RangeSensor()
-    return v.range_sensor
 
 
 def cp_runs(params: ParamStore) -> bool:

@@ -8,9 +8,19 @@ PX4 v1.15 runs Collision Prevention only in Position mode, in the flight task of
 
 from __future__ import annotations
 
-from uavtest.spec.models import Avoidance, Simulator, UavTestSpec
+from uavtest.spec.models import Avoidance, RangeSensor, Simulator, UavTestSpec
 
-__all__ = ["collision_prevention_warnings"]
+__all__ = ["collision_prevention_warnings", "range_sensor_of"]
+
+
+def range_sensor_of(spec: UavTestSpec) -> RangeSensor | None:
+    """The test's range sensor: ``vehicle.rangeSensor``, or its defaults with collision-prevention.
+    The built-in vehicle carries it; for PX4 SITL the runner simulates it
+    (``uavtest.runner.obstacle_distance``)."""
+    v = spec.vehicle
+    if v.range_sensor is None and v.avoidance is Avoidance.COLLISION_PREVENTION:
+        return RangeSensor()
+    return v.range_sensor
 
 
 def _param(spec: UavTestSpec, name: str) -> float:
@@ -28,12 +38,21 @@ def collision_prevention_warnings(spec: UavTestSpec) -> list[str]:
     out: list[str] = []
     runs = cp_dist > 0 and pos_mode == 0
     if v.simulator is Simulator.PX4:
-        if wanted or v.range_sensor is not None or runs:
+        sensor = range_sensor_of(spec)
+        if sensor is not None:
             out.append(
-                "PX4 SITL (SIH, v1.15) has no obstacle-distance sensor (vehicle.avoidance "
-                "collision-prevention and vehicle.rangeSensor are built-in simulator only): PX4's "
-                "Collision Prevention gets no data"
-                + (": position mode will not move and switches to Hold after 5 s" if runs else "")
+                "PX4 SITL (SIH, v1.15) has no obstacle-distance sensor: the runner sends PX4 "
+                f"OBSTACLE_DISTANCE as a companion computer would, scanned from the test's boxes at "
+                f"{sensor.rate:g} Hz of vehicle time where PX4's estimate puts the vehicle (PX4 drops "
+                "scans older than 0.5 s of its clock: at a high speed factor on a busy machine, "
+                "give a lower vehicle.speedFactor)"
+            )
+        elif runs:
+            out.append(
+                f"CP_DIST is {cp_dist:g} but the vehicle has no range sensor (PX4 SITL's SIH has none; "
+                "vehicle.avoidance collision-prevention or vehicle.rangeSensor makes the runner send "
+                "one's scans): PX4's Collision Prevention gets no data, position mode will not move "
+                "and switches to Hold after 5 s"
             )
         return out
     if wanted and cp_dist <= 0:

@@ -9,6 +9,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 
 from uavtest.errors import BadInput, InfrastructureError
 from uavtest.runner.events import (
+    Attitude,
     CommandAck,
     CommandLong,
     Heartbeat,
@@ -19,6 +20,7 @@ from uavtest.runner.events import (
     ManualControl,
     MissionItemInt,
     MissionRequest,
+    ObstacleDistance,
     ParamSet,
     ParamValue,
     StatusText,
@@ -40,7 +42,8 @@ def test_vehicle_messages_become_events() -> None:
         [
             frame(VEHICLE.heartbeat_encode(2, 12, 129, 4 << 16 | 4 << 24, 4)),
             frame(VEHICLE.local_position_ned_encode(1234, 1.5, -2.0, -10.0, 0, 0, 0)),
-            frame(VEHICLE.attitude_encode(1234, 0.1, 0.2, 0.3, 0, 0, 0)),  # not for the runner: skipped
+            frame(VEHICLE.attitude_encode(1234, 0.1, 0.2, 0.3, 0, 0, 0)),  # the heading only
+            frame(VEHICLE.vfr_hud_encode(1.0, 1.0, 90, 50, 10.0, 0.0)),  # not for the runner: skipped
             frame(VEHICLE.param_value_encode(b"NAV_ACC_RAD", 2.0, 9, 100, 5)),
             frame(VEHICLE.mission_request_int_encode(255, 190, 3, 0)),
             frame(VEHICLE.mission_request_encode(255, 190, 4, 0)),
@@ -56,6 +59,7 @@ def test_vehicle_messages_become_events() -> None:
     assert events == [
         Heartbeat(1, 1, 2, 12, 129, 4 << 16 | 4 << 24, 4),
         LocalPosition(1234, 1.5, -2.0, -10.0),
+        Attitude(1234, pytest.approx(0.3)),
         ParamValue("NAV_ACC_RAD", 2.0, 9, 5, 100),
         MissionRequest(3),
         MissionRequest(4),
@@ -67,7 +71,7 @@ def test_vehicle_messages_become_events() -> None:
     ]
     assert events[0].armed  # type: ignore[union-attr]
     assert events[-1].ready_to_arm and not SysStatus(32).ready_to_arm  # type: ignore[union-attr]
-    assert codec.frames == 12 and codec.decoded == 10
+    assert codec.frames == 13 and codec.decoded == 11
 
 
 def test_a_corrupt_frame_is_dropped_and_the_next_one_still_decodes() -> None:
@@ -101,9 +105,10 @@ def test_outgoing_events_are_what_pymavlink_reads_addressed_to_the_vehicle() -> 
             item,
             CommandLong(400, (1, 0, 0, 0, 0, 0, 0), confirmation=2),
             ManualControl(500, -1000, 500, 0),
+            ObstacleDistance(2_000_000, (250, 65535) + (1201,) * 70, 20, 1200, 5.0, 0.0, 12),
         )
     ]
-    grant, pset, mitem, cmd, manual = msgs
+    grant, pset, mitem, cmd, manual, scan = msgs
     assert (grant.get_type(), grant.name, grant.time_boot_ms, grant.value) == (
         "NAMED_VALUE_INT",
         "LOCKSTEP",
@@ -126,6 +131,16 @@ def test_outgoing_events_are_what_pymavlink_reads_addressed_to_the_vehicle() -> 
     )
     assert (cmd.command, cmd.confirmation, cmd.param1, cmd.target_system) == (400, 2, 1.0, 1)
     assert (manual.x, manual.y, manual.z, manual.r, manual.target) == (500, -1000, 500, 0, 1)
+    # OBSTACLE_DISTANCE as PX4's mavlink_receiver reads it: increment_f wins over increment
+    assert scan.get_type() == "OBSTACLE_DISTANCE" and scan.time_usec == 2_000_000
+    assert list(scan.distances[:3]) == [250, 65535, 1201] and len(scan.distances) == 72
+    assert (scan.increment, scan.increment_f, scan.min_distance, scan.max_distance, scan.frame) == (
+        5,
+        5.0,
+        20,
+        1200,
+        12,
+    )
     assert all(m.get_srcSystem() == 255 for m in msgs)
 
 

@@ -391,7 +391,10 @@ def test_warnings_say_when_cp_will_not_act() -> None:
     (blind,) = warn(_spec(params={"CP_DIST": 2, "MPC_POS_MODE": 0}))
     assert "no range sensor" in blind and "Hold after 5 s" in blind
     (px4,) = warn(_spec(simulator="px4", avoidance="collision-prevention"))
-    assert "no obstacle-distance sensor" in px4
+    assert "no obstacle-distance sensor" in px4 and "the runner sends PX4 OBSTACLE_DISTANCE" in px4
+    assert "at 10 Hz of vehicle time" in px4
+    (px4_blind,) = warn(_spec(simulator="px4", params={"CP_DIST": 2, "MPC_POS_MODE": 0}))
+    assert "no range sensor" in px4_blind and "Hold after 5 s" in px4_blind
 
 
 def test_range_sensor_spec_checks_its_ranges() -> None:
@@ -401,7 +404,7 @@ def test_range_sensor_spec_checks_its_ranges() -> None:
         RangeSensor.model_validate({"minRange": 5, "maxRange": 4})
     with pytest.raises(ValidationError):
         RangeSensor.model_validate({"fov": 400})
-    from uavtest.sitl.vehicle import range_sensor_of
+    from uavtest.spec.collision_prevention import range_sensor_of
 
     assert range_sensor_of(_spec(avoidance="collision-prevention")) == RangeSensor()
     assert range_sensor_of(_spec()) is None
