@@ -121,7 +121,8 @@ class Avoidance(StrEnum):
 
 class RangeSensor(Model):
     """The simulated scanning range sensor (2-D lidar) that feeds Collision Prevention
-    (``obstacle_distance``: 72 bins of 5 degrees, body frame); built-in simulator only."""
+    (``obstacle_distance``: 72 bins of 5 degrees, body frame): the built-in vehicle carries it; for
+    PX4 SITL the runner sends its scans (``uavtest.runner.obstacle_distance``)."""
 
     fov: float = Field(
         360.0,
@@ -165,8 +166,8 @@ class Vehicle(Model):
     range_sensor: RangeSensor | None = Field(
         None,
         description=(
-            "the simulated range sensor (builtin only); attached with avoidance collision-prevention "
-            "(these defaults if not given) or when given"
+            "the simulated range sensor (px4: the runner sends PX4 its scans as OBSTACLE_DISTANCE); "
+            "attached with avoidance collision-prevention (these defaults if not given) or when given"
         ),
     )
     speed_factor: SpeedFactor | None = Field(
