@@ -13,100 +13,22 @@ where it may arm. Runs when ``UAVTEST_PX4_BIN`` names a PX4 v1.15 SITL binary.
 from __future__ import annotations
 
 import math
-import threading
-import time
 from pathlib import Path
 
 import pytest
 from pymavlink.dialects.v20 import common as mavlink2
 
-from harness.mavlink_client import connect
+from harness.mavlink_client import GroundStation as Client
 from harness.net import free_udp_port
 from harness.px4_sitl import PX4_API_PORT, px4_binary, running_px4
 from harness.sitl import free_running_argv, running_sitl
 
 pytestmark = [pytest.mark.integration, pytest.mark.px4, pytest.mark.slow]
 
-PREARM = mavlink2.MAV_SYS_STATUS_PREARM_CHECK
 POSCTL, MISSION, LOITER = (3, 0), (4, 4), (4, 3)
 SPEED = 4  # times real time: the client's waits are wall-clock
 REJECTED = mavlink2.MAV_RESULT_TEMPORARILY_REJECTED
 ACCEPTED = mavlink2.MAV_RESULT_ACCEPTED
-
-
-class Client:
-    """A ground station (255/190) on one vehicle's API link: heartbeats at 1 Hz from a thread,
-    the vehicle's mode, armed state, pre-arm bit, relative altitude and STATUSTEXTs (chunks
-    joined) kept up to date by ``pump``."""
-
-    def __init__(self, port: int) -> None:
-        self.conn = connect(port)
-        self.mode: tuple[int, int] | None = None
-        self.armed = False
-        self.prearm = False
-        self.alt = math.nan
-        self.texts: list[str] = []
-        self.acks: list[tuple[int, int]] = []  # (command, result)
-        self._chunks: dict[int, str] = {}
-        self._stop = threading.Event()
-        self._beat = threading.Thread(target=self._heartbeats, daemon=True)
-        self._beat.start()
-
-    def _heartbeats(self) -> None:
-        while not self._stop.is_set():
-            self.conn.mav.heartbeat_send(mavlink2.MAV_TYPE_GCS, mavlink2.MAV_AUTOPILOT_INVALID, 0, 0, 0)
-            self._stop.wait(1.0)
-
-    def close(self) -> None:
-        self._stop.set()
-        self._beat.join(2)
-        self.conn.close()
-
-    def _take(self, m) -> None:
-        kind = m.get_type()
-        if kind == "HEARTBEAT" and m.get_srcComponent() == 1:
-            self.mode = ((m.custom_mode >> 16) & 0xFF, (m.custom_mode >> 24) & 0xFF)
-            self.armed = bool(m.base_mode & mavlink2.MAV_MODE_FLAG_SAFETY_ARMED)
-        elif kind == "COMMAND_ACK":
-            self.acks.append((m.command, m.result))
-        elif kind == "SYS_STATUS":
-            self.prearm = bool(m.onboard_control_sensors_health & PREARM)
-        elif kind == "GLOBAL_POSITION_INT":
-            self.alt = m.relative_alt / 1000
-        elif kind == "STATUSTEXT":
-            text = m.text.rstrip("\t")
-            if m.id:
-                text = self._chunks[m.id] = self._chunks.get(m.id, "") + m.text
-                if len(m.text) == 50:  # more chunks follow
-                    return
-                text = text.rstrip("\t")
-            self.texts.append(text)
-
-    def until(self, cond, seconds: float, what: str) -> None:
-        end = time.monotonic() + seconds
-        while not cond():
-            if time.monotonic() > end:
-                raise AssertionError(f"timed out waiting for {what}; texts {self.texts[-8:]}")
-            m = self.conn.recv_match(blocking=True, timeout=0.5)
-            if m is not None:
-                self._take(m)
-
-    def command(self, cmd: int, *params: float, settle: float = 0.5) -> int:
-        """Send a COMMAND_LONG, wait for its ACK, then ``settle`` seconds (wall clock) for what
-        follows it (texts, telemetry); its MAV_RESULT."""
-        p = [*params, *[0.0] * (7 - len(params))]
-        self.acks.clear()
-        self.conn.mav.command_long_send(1, 1, cmd, 0, *p)
-        self.until(lambda: any(c == cmd for c, _ in self.acks), 10, f"the ACK of command {cmd}")
-        self.settle(settle)
-        return next(r for c, r in self.acks if c == cmd)
-
-    def settle(self, seconds: float) -> None:
-        end = time.monotonic() + seconds
-        self.until(lambda: time.monotonic() > end, seconds + 1, "time")
-
-    def set_mode(self, mode: tuple[int, int]) -> int:
-        return self.command(mavlink2.MAV_CMD_DO_SET_MODE, 1, *mode)
 
 
 def _exercise(port: int, settle_s: float) -> dict[str, object]:

@@ -77,6 +77,38 @@ def test_a_refused_mode_is_fail_with_the_vehicles_statustext(tmp_path: Path) -> 
     assert r["metrics"]["flight_time"] == 0.0
 
 
+def test_a_mission_px4_would_refuse_is_fail_saying_why(tmp_path: Path) -> None:
+    """A QGC plan whose takeoff follows a waypoint (as an ArduPilot-style file puts home first):
+    PX4 v1.15 refuses it ("Mission rejected: takeoff not first waypoint item") and so does the
+    built-in vehicle: fail, never took off, the rejection in the reason; never a pass."""
+    home = [47.397742, 8.545594, 488.0]
+
+    def item(cmd: int, alt: float) -> dict[str, Any]:
+        return {
+            "type": "SimpleItem",
+            "command": cmd,
+            "frame": 3,
+            "params": [0, 0, 0, None, 47.3979, 8.545594, alt],
+        }
+
+    plan = {
+        "fileType": "Plan",
+        "version": 1,
+        "mission": {
+            "version": 2,
+            "plannedHomePosition": home,
+            "items": [item(16, 10), item(22, 10), item(21, 0)],
+        },
+    }
+    spec = {"replicas": 1, "seed": 1, "timeout": 60, "mission": {"plan": plan}}
+    out = uavtest_run(write_test(tmp_path, "refused-plan", spec), tmp_path / "out", "--replicas", "1")
+    assert out.summary is not None, out.stderr[-3000:]
+    (r,) = out.summary["results"]
+    assert r["verdict"] == "fail" and out.code == 1
+    assert r["reason"].startswith("the vehicle never took off: vehicle refused mode mission")
+    assert '"Mission rejected: takeoff not first waypoint item"' in r["reason"]
+
+
 def test_a_ground_test_keeps_passing(tmp_path: Path) -> None:
     """By design no flight (arm, disarm): judged as before, obstacles or not."""
     spec = {

@@ -33,6 +33,7 @@ log = logging.getLogger(__name__)
 
 STATUS_WINDOW_MS = 1000  # STATUSTEXTs up to this long after a refusing ACK belong to it
 WARNING_SEVERITY = 4  # MAV_SEVERITY_WARNING: this and more severe explain a vehicle's refusal
+CRITICAL_SEVERITY = 2  # MAV_SEVERITY_CRITICAL: how PX4 says why it refuses a mission
 
 
 def _quoted(texts: list[str]) -> str:
@@ -56,7 +57,14 @@ def vehicle_reason(report: FlightReport) -> str | None:
         seen.add(r.label)
         texts = [t for ms, _sev, t in report.status_log if r.sent_ms <= ms <= r.ack_ms + STATUS_WINDOW_MS]
         part = f"vehicle refused {r.label} (COMMAND_ACK {r.result})"
-        parts.append(f"{part}: {_quoted(texts)}" if texts else part)
+        part = f"{part}: {_quoted(texts)}" if texts else part
+        if "mission" in r.label:
+            # PX4 says why a mission is not valid when it checks it (the upload, the arming:
+            # "Mission rejected: ...", "Geofence violation for waypoint N"), not when refusing it
+            earlier = [t for ms, sev, t in report.status_log if sev <= CRITICAL_SEVERITY and ms < r.sent_ms]
+            if earlier:
+                part += f"; it said before: {_quoted(earlier[-2:])}"
+        parts.append(part)
     if parts:
         return "; ".join(parts)
     start = report.start_ms if report.start_ms is not None else 0

@@ -17,7 +17,14 @@ from collections.abc import Iterator, Mapping
 from uavtest.px4 import parameters as px4_parameters
 from uavtest.sitl.mav import ParamType
 
-__all__ = ["DEFAULTS", "UNMODELLED_AT_BOOT", "ParamStore", "decode_param_value", "encode_param_value"]
+__all__ = [
+    "DEFAULTS",
+    "READ_WHEN_USED",
+    "UNMODELLED_AT_BOOT",
+    "ParamStore",
+    "decode_param_value",
+    "encode_param_value",
+]
 
 INT, FLOAT = ParamType.INT32, ParamType.REAL32
 
@@ -72,6 +79,7 @@ DEFAULTS: dict[str, tuple[ParamType, float]] = {
     "MIS_TAKEOFF_ALT": (FLOAT, 2.5),
     "MIS_YAW_ERR": (FLOAT, 12.0),
     "MIS_YAW_TMT": (FLOAT, -1.0),
+    "MIS_DIST_1WP": (FLOAT, 900.0),  # navigator/mission_feasibility.py
     "NAV_LOITER_RAD": (FLOAT, 80.0),  # Loiter::set_loiter_position's "already on the loiter"
     "RTL_RETURN_ALT": (FLOAT, 30.0),
     "RTL_DESCEND_ALT": (FLOAT, 10.0),
@@ -164,7 +172,6 @@ UNMODELLED_AT_BOOT: tuple[str, ...] = (
     "COM_HOME_EN",
     "COM_FLTMODE1",
     "NAV_TRAFF_AVOID",
-    "MIS_DIST_1WP",
     "MPC_ACC_HOR_MAX",
     "MPC_TILTMAX_LND",
     "MPC_ALT_MODE",
@@ -176,6 +183,13 @@ UNMODELLED_AT_BOOT: tuple[str, ...] = (
     "SDLOG_PROFILE",
     "EKF2_HGT_REF",
 )
+
+
+#: PX4 v1.15 parameters the simulator reads that PX4 SIH does not hold at boot: PX4 lists (and logs)
+#: a parameter once a module has looked it up, and these are looked up only when needed
+#: (FeasibilityChecker reads MIS_TKO_LAND_REQ at its first mission check). ``ParamStore`` stores
+#: each with PX4's default when it is first read, so it is listed from then on, as on PX4.
+READ_WHEN_USED: tuple[str, ...] = ("MIS_TKO_LAND_REQ",)
 
 
 def encode_param_value(value: float, ptype: ParamType) -> float:

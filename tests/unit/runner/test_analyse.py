@@ -103,6 +103,23 @@ def test_vehicle_reason_quotes_the_statustexts_of_the_refusal() -> None:
     assert vehicle_reason(rep) == "vehicle refused arm (COMMAND_ACK DENIED)"
 
 
+def test_a_refused_mission_gets_what_the_vehicle_said_when_it_checked_the_mission() -> None:
+    """PX4 says why a mission is not valid when it checks it (the upload, the arming), not when
+    it then refuses Mission mode: the reason carries those critical texts too."""
+    texts = [
+        (300, 2, "Mission rejected: takeoff not first waypoint item"),  # at the upload
+        (1_450, 6, "Ready for takeoff!"),
+        (2_000, 4, "Switching to Mission is currently not available"),
+    ]
+    rep = refused_report("mode mission", "TEMPORARILY_REJECTED", texts)
+    assert vehicle_reason(rep) == (
+        'vehicle refused mode mission (COMMAND_ACK TEMPORARILY_REJECTED): "Switching to Mission is '
+        'currently not available"; it said before: "Mission rejected: takeoff not first waypoint item"'
+    )
+    rep = refused_report("arm", "DENIED", texts)  # not a mission: only its own texts
+    assert "it said before" not in (vehicle_reason(rep) or "")
+
+
 def test_vehicle_reason_without_refusals_is_the_vehicles_warnings_or_none() -> None:
     rep = FlightReport(start_ms=1_000)
     rep.status_log = [(500, 2, "before the flight"), (1_500, 6, "info"), (3_000, 1, "Failsafe: no RC")]

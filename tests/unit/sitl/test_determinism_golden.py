@@ -281,26 +281,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: params_and_commands' Mission without a mission is taken disarmed and arming in it refused
 #: ("Arming denied: Resolve system health failures first", as in Offboard), and after landing it
 #: arms again in Hold (it stayed in Land before, a mode PX4 does not arm in).
+#: stop 27: PX4's mission FeasibilityChecker (MIS_DIST_1WP now modelled, MIS_TKO_LAND_REQ stored
+#: when first read, as PX4 lists it once used: the parameter lists change) and waypoints reached
+#: only in the air; with the parameter table as before, every hash was unchanged: no flight changed.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "c61ea60b7113a0c22142ae63d1abaac7e0121e5f9e0dd9f0daa4651d5b9b541b",
+        "b98d6abce785c8e6f690640d2b6ac95fe368206f17a43645bf1350c20b087df3",
         "4e7ae539fb78eddda2d976225bf4a5f76cb0d6d147531259101e910e57322f6f",
     ),
     "manual_and_rtl": (
-        "506c8a18707955ac9b0884f61511a3e29679ffc6f81fac1ed9668a915001ecb2",
+        "0bb80ad68efe759b5d929a22c08e655268338feff646fef6b9c7900061a24b50",
         "a3ac5efcbd2465a4bda9e85a703ee8d6be2466dea50aafc4579b3a28b70a6033",
     ),
     "datalink_loss": (
-        "ee62e71d7876f38f4382b19b696f2081f6d07a4a5b12bebb545978f59fb77fa9",
+        "60fc58a98cdb5cfdfc1782502cec9b6efc548d195c71f6ecb785f78d65fd7862",
         "c4a06a38305a54cb3c7b5ed58856c49a69b6902f6bbbc0e0b246832b4e06e7e6",
     ),
     "crash": (
-        "7f155b4a781fd9c47f5bf5d6566e112b6065e35dc3cae6e3c67f8454c61f85fb",
+        "015d2a29cff84c834535deda54936c6ecb4bf934b935c91619363c09d6173230",
         "2f23bde1fc1b3f30785ffff95e0db04f2ce90418d1aeb187c685a9cafecf6d7e",
     ),
     "params_and_commands": (
-        "b64e687b8c3c356641dc7ea9f7e26012fe56bd517c3bb3ed317ae4e9d260d66a",
-        "d088548d34edb81fd907273c81f49552875423779b2c818aeba9044a3576f6a0",
+        "ed19267e3ea88e7e241987b4e7fe5027f25a76eb545d4e264ad7423a6f3a8de8",
+        "5325849cf652212cbecdf5f0fb81ac85312559b98f0de01817350dce4add6c31",
     ),
 }
 

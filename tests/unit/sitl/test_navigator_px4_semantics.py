@@ -156,18 +156,35 @@ def test_a_test_files_waypoint_heading_is_flown(yaw: float | None, facing: float
 # ---------------------------------------------------------------- 2. the takeoff item's position
 
 
-def test_a_first_waypoint_on_the_ground_is_not_climbed_to_the_takeoff_after_it_is():
-    """An ArduPilot-style QGC WPL file (MAVProxy's ``wp load``) sends home as item 0: a waypoint
-    where the vehicle stands. checkClimbRequired climbs only to an item more than NAV_MC_ALT_RAD
-    above: no "Climb to 0.0 meters above home"; the item is reached on the ground and the takeoff
-    item after it climbs."""
+def test_a_takeoff_after_a_waypoint_is_refused_as_px4s_feasibility_checker_does():
+    """An ArduPilot-style QGC WPL file (MAVProxy's ``wp load``) sends home as item 0, a waypoint
+    where the vehicle stands, then the takeoff: PX4 v1.15 refuses that mission ("Mission
+    rejected: takeoff not first waypoint item", FeasibilityChecker::checkTakeoff), so it is not
+    valid and MISSION_START is denied (PX4 SIH, ``tests/integration/test_ground_waypoint_against_px4.py``)."""
     st = State(x=0.0, y=0.0, z=0.02, yaw=0.0, landed=True)
     items = [at(0, MavCmd.NAV_WAYPOINT, 0.0, 0.0, 0.0), at(1, MavCmd.NAV_TAKEOFF, 0.0, 0.0, 5.0)]
     nav = navigator(items, st)
-    events = run(nav, st, 0.0, 0.2)
-    assert reached(events, 0) is not None and nav.current == 1
-    assert texts(events) == ["Climb to 5.0 meters above home"]
-    assert nav.update(st, 0.3).kind is GoalKind.TAKEOFF
+    assert not nav.mission_valid
+    nav.check_mission_feasible()  # said at each check (the upload's was cleared above)
+    assert texts([(0.0, e) for e in nav.events]) == ["Mission rejected: takeoff not first waypoint item"]
+    nav.set_mission([items[1], dataclasses.replace(items[0], seq=1, z=5.0)])  # takeoff first: fine
+    assert nav.mission_valid
+
+
+def test_a_waypoint_is_never_reached_on_the_ground():
+    """MissionBlock::is_mission_item_reached_or_completed updates "waypoint position reached" only
+    while not landed: a mission started on the ground whose first item is a waypoint where the
+    vehicle stands (no climb owed: checkClimbRequired) stays on it, on the ground, and PX4 SIH
+    then disarms (COM_DISARM_PRFLT)."""
+    st = State(x=0.0, y=0.0, z=0.02, yaw=0.0, landed=True)
+    items = [at(0, MavCmd.NAV_WAYPOINT, 0.0, 0.0, 0.0), at(1, MavCmd.NAV_WAYPOINT, 15.0, 0.0, 5.0)]
+    nav = navigator(items, st)
+    assert nav.mission_valid
+    events = run(nav, st, 0.0, 5.0)
+    assert reached(events, 0) is None and nav.current == 0
+    assert not any(t.startswith("Climb to") for t in texts(events))
+    g = nav.update(st, 5.0)
+    assert g.kind is GoalKind.POSITION and g.z == pytest.approx(0.0, abs=0.05)
 
 
 def test_a_takeoff_item_climbs_then_flies_to_its_position():

@@ -59,6 +59,7 @@ from uavtest.sitl.mav import MavCmd, MavSeverity
 from uavtest.sitl.mc_pos_control import NO_NEXT, NO_TRACK, Goal, GoalKind, wrap_pi
 from uavtest.sitl.mission import NavItem, has_position
 from uavtest.sitl.navigator.geofence import NAV_RALLY_POINT, Geofence, rally_destination
+from uavtest.sitl.navigator.mission_feasibility import feasibility_failures
 from uavtest.sitl.navigator.rtl import (
     FLT_EPSILON,
     f32,
@@ -187,7 +188,11 @@ class Navigator:
         self._goal = Goal()
         self.geofence = Geofence(projection)
         self.rally: list[tuple[float, float]] = []  # rally points, local x, y
-        self.mission_feasible = True  # the mission passes the geofence
+        self.mission_feasible = True  # the mission passes FeasibilityChecker and the geofence
+        #: the land detector's landed and the vehicle's x, y at the latest update: what PX4's
+        #: FeasibilityChecker reads when it checks a mission
+        self.landed = True
+        self.vehicle_at = (0.0, 0.0)
         self.failure = False  # mission_result.failure: a forced heading not reached in MIS_YAW_TMT
         #: MissionBase::_mission_init_climb_altitude_amsl as a local z: the climb owed before the
         #: first position item (checkClimbRequired on activation), None when none is
@@ -233,13 +238,26 @@ class Navigator:
         self.rally = [self.proj.project(it.lat, it.lon) for it in items if it.command == NAV_RALLY_POINT]
 
     def check_mission_feasible(self) -> None:
-        """MissionFeasibilityChecker::checkMissionAgainstGeofence: every waypoint inside the fence.
-        A check also clears mission_result.failure (MissionBase::check_mission_valid)."""
+        """MissionFeasibilityChecker::checkMissionFeasible: FeasibilityChecker's item checks
+        (``mission_feasibility.py``), then checkMissionAgainstGeofence (every waypoint inside the
+        fence), each failure said. A check also clears mission_result.failure
+        (MissionBase::check_mission_valid)."""
         self.failure = False
         p = self.params
         gf = self.geofence
         max_hor, max_ver = p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"]
-        ok = True
+        vx, vy = self.vehicle_at
+        texts = feasibility_failures(
+            self.mission,
+            landed=self.landed,
+            home_amsl=self.home_alt - self.home[2],
+            distance_to=lambda item: math.dist(self.proj.project(item.lat, item.lon), (vx, vy)),
+            dist_1wp=p["MIS_DIST_1WP"],
+            takeoff_land_req=int(p["MIS_TKO_LAND_REQ"]),
+        )
+        for text in texts:
+            self.events.append(Event(EventKind.TEXT, (MavSeverity.CRITICAL, text)))
+        ok = not texts
         if self.mission and (max_hor > 0 or max_ver > 0 or gf.areas):
             hx, hy, hz = self.home
             home_amsl = self.home_alt - hz
@@ -429,6 +447,7 @@ class Navigator:
     # ------------------------------------------------------------------ the tick
 
     def update(self, st: State, now: float) -> Goal:
+        self.landed, self.vehicle_at = st.landed, (st.x, st.y)
         ns = self.nav_state
         if ns == NavState.AUTO_MISSION:
             return self._mission(st, now)
@@ -588,7 +607,12 @@ class Navigator:
                 radius = item.param2
             dxy = math.hypot(s.x - st.x, s.y - st.y)
             dz = abs(s.z - st.z)
-            if dxy <= radius and (cmd == MavCmd.NAV_LAND or dz <= p["NAV_MC_ALT_RAD"]):
+            # is_mission_item_reached_or_completed: a land item is flown to at altitude first (and
+            # done once landed); any other position is reached only in the air ("Update the
+            # 'waypoint position reached' status" only while not landed): a waypoint on the ground
+            # where the vehicle stands is never reached, and PX4 does not take off towards it
+            in_air = not st.landed
+            if dxy <= radius and (cmd == MavCmd.NAV_LAND or (in_air and dz <= p["NAV_MC_ALT_RAD"])):
                 if cmd == MavCmd.NAV_LAND:
                     self.reached = self.current
                     self.events.append(Event(EventKind.REACHED, self.current))
