@@ -4,7 +4,7 @@
   real kubelet + containerd or a kwok fake node, build and import the runner image.
 - `harness.minio`: a MinIO server on a free loopback port with random credentials.
 - `harness.net`: `free_udp_port`.
-- `harness.sitl`: `running_sitl` (a `uavtest sitl` process for a `with` block), `stop_sitl`,
+- `harness.sitl`: `running_sitl` (a `uavtest sitl` process for a `with` block), `stop_process`,
   `free_running_argv` (the command line MAVSDK tests use), `eventually`.
 - `harness.mavlink_client`: `connect` (a pymavlink udpin connection as a ground station) and the
   shared lockstep `LockstepClient`.

@@ -14,6 +14,7 @@ from typing import IO
 
 import pytest
 
+from harness.sitl import stop_process
 from uavtest.engine.px4home import px4_home_env, sih_latlon_is_int
 from uavtest.spec.models import Home
 
@@ -59,13 +60,7 @@ def start_px4(
 
 def stop_px4(proc: subprocess.Popen[bytes]) -> None:
     """SIGINT (PX4's shell stops its modules and closes its log), then SIGKILL after 15 s."""
-    if proc.poll() is None:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(5)
+    stop_process(proc, timeout=15.0, sig=signal.SIGINT)
 
 
 @contextmanager

@@ -20,13 +20,15 @@ def free_running_argv(port: int, log_dir: Path, speed_factor: float) -> list[str
     ]
 
 
-def stop_sitl(proc: subprocess.Popen, *, graceful: bool = True, timeout: float = 10.0) -> None:
-    """End ``proc`` if it still runs: SIGTERM and ``timeout`` s to exit, then SIGKILL
+def stop_process(
+    proc: subprocess.Popen, *, graceful: bool = True, timeout: float = 10.0, sig: int = signal.SIGTERM
+) -> None:
+    """End ``proc`` if it still runs: ``sig`` (SIGTERM) and ``timeout`` s to exit, then SIGKILL
     (``graceful=False``: SIGKILL at once)."""
     if proc.poll() is not None:
         return
     if graceful:
-        proc.send_signal(signal.SIGTERM)
+        proc.send_signal(sig)
         try:
             proc.wait(timeout)
             return
@@ -41,12 +43,12 @@ def running_sitl(
     argv: Sequence[str], *, env: Mapping[str, str] | None = None, graceful: bool = True
 ) -> Iterator[subprocess.Popen]:
     """Run ``argv`` (a `uavtest sitl` command line) for the ``with`` block; yields the Popen and
-    stops it on the way out (see `stop_sitl`)."""
+    stops it on the way out (see `stop_process`)."""
     proc = subprocess.Popen(list(argv), env=None if env is None else dict(env))
     try:
         yield proc
     finally:
-        stop_sitl(proc, graceful=graceful)
+        stop_process(proc, graceful=graceful)
 
 
 def eventually(condition: Callable[[], bool], seconds: float, what: str) -> None:

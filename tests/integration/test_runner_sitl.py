@@ -10,7 +10,6 @@ from __future__ import annotations
 import contextlib
 import json
 import re
-import signal
 import socket
 import subprocess
 import sys
@@ -23,6 +22,7 @@ from typing import Any
 import pytest
 import yaml
 
+from harness.sitl import stop_process
 from uavtest.analysis.models import ReplicaResult, Verdict
 from uavtest.analysis.trajectory import Trajectory
 
@@ -95,13 +95,7 @@ def simulator(replica: Replica, tmp_path: Path) -> Iterator[subprocess.Popen[byt
     try:
         yield proc
     finally:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGTERM)
-            try:
-                proc.wait(15)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(5)
+        stop_process(proc, timeout=15.0)
         log.close()
 
 

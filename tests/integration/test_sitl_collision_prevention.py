@@ -19,7 +19,7 @@ from pyulog import ULog
 
 from harness.mavlink_client import connect
 from harness.net import free_udp_port
-from harness.sitl import stop_sitl
+from harness.sitl import stop_process
 from uavtest.engine.replica import sitl_command
 
 pytestmark = pytest.mark.integration
@@ -68,7 +68,7 @@ class Pilot:
         self.seen: dict[str, list] = {}
 
     def close(self) -> None:
-        stop_sitl(self.proc, graceful=False)
+        stop_process(self.proc, graceful=False)
         self.conn.close()
 
     def command(self, cmd: int, *params: float) -> int:

@@ -19,7 +19,7 @@ from pyulog import ULog
 
 from harness.mavlink_client import connect
 from harness.net import free_udp_port
-from harness.sitl import stop_sitl
+from harness.sitl import stop_process
 from uavtest.engine.replica import sitl_command
 from uavtest.sitl.geo import Projection
 from uavtest.spec.models import Home
@@ -96,7 +96,7 @@ class Vehicle:
         self._chunks: dict[int, list[str]] = {}
 
     def close(self) -> None:
-        stop_sitl(self.proc, graceful=False)
+        stop_process(self.proc, graceful=False)
         self.c.conn.close()
 
     def upload(self, mtype: int, items: list[tuple[int, float, float, float]]) -> int:

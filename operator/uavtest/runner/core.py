@@ -310,22 +310,25 @@ class ReplicaCore:
             self.now_ms = p.time_ms
         elif p.time_ms < self.now_ms - JITTER_MS and self.stage in _REBOOT_WATCHED:
             return self._rebooted(p.time_ms, wall)
-        out: list[Outgoing] = []
         if self.obstacle_feed is not None and self.stage is not Stage.DONE:
             scan = self.obstacle_feed.on_position(p.time_ms, p.x, p.y, p.z)
             if scan is not None:
-                out.append(scan)
+                return [scan, *self._position_step(p, wall)]
+        return self._position_step(p, wall)
+
+    def _position_step(self, p: LocalPosition, wall: float) -> list[Outgoing]:
+        """A position's work for the stage: the flight's checks and step, or the connection."""
         if self.stage is Stage.FLIGHT:
             self.monitor.on_position(p)
             flying = self._in_mission and self.armed and self.monitor.airborne
             self.progress.on_position(p.x, p.y, p.z, p.time_ms, flying)
             if not self.lockstep:
-                return out + self._flight_step(wall)
-            return out
+                return self._flight_step(wall)
+            return []
         if not self._have_local:
             self._have_local = True
-            return out + self._advance(wall)
-        return out
+            return self._advance(wall)
+        return []
 
     def _on_heartbeat(self, hb: Heartbeat, wall: float) -> list[Outgoing]:
         if hb.autopilot == Autopilot.INVALID or hb.type in (MavType.GCS, MavType.ONBOARD_CONTROLLER):

@@ -189,10 +189,9 @@ class Navigator:
         self.geofence = Geofence(projection)
         self.rally: list[tuple[float, float]] = []  # rally points, local x, y
         self.mission_feasible = True  # the mission passes FeasibilityChecker and the geofence
-        #: the land detector's landed and the vehicle's x, y at the latest update: what PX4's
-        #: FeasibilityChecker reads when it checks a mission
-        self.landed = True
-        self.vehicle_at = (0.0, 0.0)
+        #: the vehicle's state at the latest update (landed, x, y): what PX4's FeasibilityChecker
+        #: reads when it checks a mission; None before the first (landed at the origin)
+        self._latest: State | None = None
         self.failure = False  # mission_result.failure: a forced heading not reached in MIS_YAW_TMT
         #: MissionBase::_mission_init_climb_altitude_amsl as a local z: the climb owed before the
         #: first position item (checkClimbRequired on activation), None when none is
@@ -246,10 +245,11 @@ class Navigator:
         p = self.params
         gf = self.geofence
         max_hor, max_ver = p["GF_MAX_HOR_DIST"], p["GF_MAX_VER_DIST"]
-        vx, vy = self.vehicle_at
+        st = self._latest
+        vx, vy = (st.x, st.y) if st is not None else (0.0, 0.0)
         texts = feasibility_failures(
             self.mission,
-            landed=self.landed,
+            landed=st.landed if st is not None else True,
             home_amsl=self.home_alt - self.home[2],
             distance_to=lambda item: math.dist(self.proj.project(item.lat, item.lon), (vx, vy)),
             dist_1wp=p["MIS_DIST_1WP"],
@@ -447,7 +447,7 @@ class Navigator:
     # ------------------------------------------------------------------ the tick
 
     def update(self, st: State, now: float) -> Goal:
-        self.landed, self.vehicle_at = st.landed, (st.x, st.y)
+        self._latest = st
         ns = self.nav_state
         if ns == NavState.AUTO_MISSION:
             return self._mission(st, now)
