@@ -8,7 +8,8 @@ its lift-off point and resampled onto normalised time (``uavtest.analysis.fideli
 is off (the PX4 SIH flights had none). Target: every built-in-vs-PX4 mean inside PX4's range.
 
 Plans: the competition's mission1 and mission2 (``competition/snippets/case_studies``, their
-``mission-params.csv``), PX4 logs run1-3 and sf1; and ``square-mission`` rebuilt from the data
+``mission-params.csv``), PX4 logs run1-3 and sf1; its mission3, no shared PX4 log (only with
+``--px4-logs mission3=DIR``); and ``square-mission`` rebuilt from the data
 README (MIS_TAKEOFF_ALT 5, MPC_XY_CRUISE 8; takeoff to 10 m, 30 m north, 30 m east, land there),
 one PX4 log, so no PX4-vs-PX4 range.
 
@@ -120,6 +121,8 @@ PLANS: dict[str, tuple[Plan | None, list[str]]] = {
     "mission1": (None, [f"competition-mission1-{r}.ulg" for r in ("run1", "run2", "run3", "sf1")]),
     "mission2": (None, [f"competition-mission2-{r}.ulg" for r in ("run1", "run2", "run3", "sf1")]),
     "square": (square, ["square-mission.ulg"]),
+    # no shared PX4 log: fly your own (``simulator: px4``) and pass ``--px4-logs mission3=DIR``
+    "mission3": (None, []),
 }
 
 
@@ -457,13 +460,15 @@ def main() -> None:
         shared = px4_flights(logs)
         yours = px4_flights([], extra.get(name, []))
         px4 = shared.joined(yours)
+        if not px4.figures:
+            raise SystemExit(f"{name}: no PX4 flight of this plan in the shared data: --px4-logs {name}=DIR")
         if name in extra:
             console.print(f"{name}: {len(logs)} shared PX4 logs and {len(extra[name])} from --px4-logs")
         ours, wall = builtin_flights(plan, args.seeds)
         t, ok = table(name, px4, ours)
         all_ok &= ok or len(px4.figures) < 2
         console.print(t)
-        if name in extra:
+        if name in extra and len(shared.figures) >= 2:
             console.print(yardstick_table(name, shared, yours, ours))
         per = statistics.mean(f.flight_time for f in ours.figures)
         console.print(f"  {args.seeds} built-in flights in {wall:.1f} s wall ({per:.0f} s flight each)\n")

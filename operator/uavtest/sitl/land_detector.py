@@ -131,12 +131,13 @@ class LandDetector:
         """PX4's land detector: under climb-rate control, ground contact needs a commanded descent.
 
         While the takeoff ramp builds up thrust (or any climb is commanded) a vehicle still
-        resting on the ground is not landing: PX4 requires the velocity setpoint to point down
-        at >= 1.1 LNDMC_Z_VEL_MAX (itself capped at min(MPC_LAND_CRWL, MPC_LAND_SPEED) / 1.2)
-        until it is landed. Without climb-rate control (manual/stabilized) thrust alone decides,
-        and the body only rests on the ground at low thrust.
+        resting on the ground is not landing (a takeoff going back down to its track's start,
+        ``Controller.takeoff_via``, is judged as any descent): PX4 requires the velocity setpoint
+        to point down at >= 1.1 LNDMC_Z_VEL_MAX (itself capped at min(MPC_LAND_CRWL,
+        MPC_LAND_SPEED) / 1.2) until it is landed. Without climb-rate control (manual/stabilized)
+        thrust alone decides, and the body only rests on the ground at low thrust.
         """
-        if goal is GoalKind.TAKEOFF:
+        if goal is GoalKind.TAKEOFF and not self.ctrl.takeoff_via:
             return False
         if goal in (GoalKind.ATTITUDE, GoalKind.IDLE):
             return True

@@ -345,6 +345,9 @@ class Controller:
         #: an axis without velocity control (altitude and manual modes); logged as
         #: vehicle_local_position_setpoint.vx/vy/vz
         self.vsx = self.vsy = self.vsz = math.nan
+        #: a takeoff heading for one of FlightTaskAuto's internal waypoints (``update``): the
+        #: land detector then treats it as any other auto setpoint
+        self.takeoff_via = False
 
     def reset(self, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float) -> None:
         """Restart the reference at the vehicle's state (mode switch, arming)."""
@@ -608,12 +611,26 @@ class Controller:
             self.reset(x, y, z, 0.0, 0.0, 0.0, yaw)
             return 0.0, 0.0, GRAVITY, 0.0
         self._velocity_derivative(dt, vx, vy)
-        if kind is GoalKind.POSITION:
+        self.takeoff_via = False
+        if kind is GoalKind.TAKEOFF:
+            # FlightTaskAuto's track states run for a takeoff triplet too. It has no previous
+            # waypoint, so its track starts where the vehicle was when the triplet came, a moment
+            # after the navigator took the takeoff point (``Navigator::_start_position``): a
+            # centimetre-short track in the direction the estimate moved. Drifting more than the
+            # acceptance radius behind its start in the climb ("previous in front"), PX4 goes back
+            # down to that start on the ground, and climbs again once within the radius
+            # (PX4 SIH's takeoff stalls); beside the track it climbs towards its closest point
+            prev = self._track_prev(goal, x, y, z)
+            tx, ty, tz, self.takeoff_via = track_target(goal, x, y, z, lim.acc_rad, prev)
+        if kind is GoalKind.POSITION or self.takeoff_via:
             speed = goal.speed if goal.speed == goal.speed else lim.cruise
             speed = min(speed, lim.vel_max)
             acc_rad = goal.acc_rad if goal.acc_rad == goal.acc_rad else lim.acc_rad
-            prev = self._track_prev(goal, x, y, z)
-            tx, ty, tz, via = track_target(goal, x, y, z, acc_rad, prev)
+            if kind is GoalKind.POSITION:
+                prev = self._track_prev(goal, x, y, z)
+                tx, ty, tz, via = track_target(goal, x, y, z, acc_rad, prev)
+            else:
+                via = True
             # PositionSmoothing's waypoints {trajectory, target, next}: an internal waypoint before
             # the target is passed towards the target; the target towards the triplet's next
             nxt = (goal.x, goal.y, goal.z) if via else goal.next

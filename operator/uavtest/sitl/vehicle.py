@@ -525,6 +525,7 @@ class Vehicle:
         self.wind.update(dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:
             self.world.refresh_near(self.body.x, self.body.y)
+        self.nav.position_sample = (self.st.x, self.st.y)  # the navigator samples a tick behind
         self._estimate()
         sim = self.sim
         faulty = sim.faulty

@@ -56,3 +56,35 @@ def test_builtin_flies_the_competition_missions_within_loose_bounds_of_px4(share
     )
     assert ft_ours.high - ft_ours.low > 0.5, "replicas with different seeds fly the same time"
     assert spread([f.jitter for f in ours]).high <= JITTER_FACTOR * spread([f.jitter for f in px4]).high
+
+
+def _stalled(samples: list[tuple[float, float, float, float]], altitude: float) -> bool:
+    """The climb turned back: the true height fell by a metre or more before it first reached 90 %
+    of the takeoff altitude."""
+    peak = 0.0
+    for _, _, _, z in samples:
+        h = -z
+        if h >= 0.9 * altitude:
+            return False
+        peak = max(peak, h)
+        if peak - h >= 1.0:
+            return True
+    return False
+
+
+def test_some_takeoffs_stall_and_recover_as_px4_sihs_do(shared_data: Path) -> None:
+    """4 of 32 PX4 v1.15 SIH flights of the competition's missions (2 of 8 of mission3, flown here)
+    climbed, went back down to the ground and climbed again: FlightTaskAuto's track states on the
+    takeoff's centimetre-short track (``test_a_takeoff_drifting_behind_its_tracks_start_goes_back_
+    down_to_it``). The built-in vehicle's takeoffs drift as far (0.2-0.7 m) and some stall too;
+    every stalled one still flies its mission."""
+    stalls = 0
+    for seed in range(20):
+        config, items = competition(shared_data, 3, seed=seed)
+        flight = fly_mission(config, items)
+        assert flight.vehicle is not None and not flight.vehicle.crashed
+        if _stalled(flight.samples, 10.0):
+            stalls += 1
+            assert [i for i, _ in flight.reached] == list(range(len(items))), f"seed {seed}: {flight.reached}"
+            assert flight.landed_s is not None, f"seed {seed} did not land"
+    assert 1 <= stalls <= 6, stalls

@@ -282,3 +282,38 @@ def test_an_auto_mode_limits_the_climb_rate_setpoint_as_px4_does() -> None:
     for _ in range(300):  # the vehicle stays at 10 m, the reference climbs away at 3 m/s
         c.update(0.02, up, 0.0, 0.0, -10.0, 0.0, 0.0, 0.0, 0.0)
     assert c.vsz == pytest.approx(-3.0, abs=1e-6)
+
+
+def _takeoff_reference(vehicle: tuple[float, float]) -> tuple[float, float, bool]:
+    """The takeoff reference's vertical speed and altitude (NED) 2 s after it was 5 m up, climbing,
+    with the vehicle held there over ``vehicle``; the takeoff point is (0, 0), the track started
+    1 cm east of it on the ground."""
+    store = ParamStore()
+    store.set("NAV_ACC_RAD", 0.5)  # the competition's
+    c = Controller(Limits.of(store))
+    c.reset(0.0, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0)
+    goal = Goal(GoalKind.TAKEOFF, x=0.0, y=0.0, z=-10.0)
+    c.update(0.02, goal, 0.0, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0)  # the triplet comes: the track's start
+    # later in the climb: the reference at the vehicle, 5 m up, climbing at 1 m/s
+    c.ramp = 10.0  # past mc_pos_control's takeoff ramp
+    c.px, c.py, c.pz, c.vz = vehicle[0], vehicle[1], -5.0, -1.0
+    for _ in range(100):
+        c.update(0.02, goal, vehicle[0], vehicle[1], -5.0, 0.0, 0.0, c.vz, 0.0)
+    return c.vz, c.pz, c.takeoff_via
+
+
+def test_a_takeoff_drifting_behind_its_tracks_start_goes_back_down_to_it() -> None:
+    """PX4 SIH's takeoff stalls (4 of 32 PX4 v1.15 SIH flights of the competition's missions: up
+    to 8.9 m, back down to the ground, up again, 15-20 s late). FlightTaskAuto runs its track states
+    for a takeoff triplet too: without a previous waypoint the track starts where the vehicle was
+    when the triplet came, a moment after the navigator took the takeoff point, so it is a
+    centimetre-short line (here from 1 cm east to the takeoff point). More than NAV_ACC_RAD behind
+    that start ("previous in front") the target is the start itself, on the ground."""
+    vz, pz, via = _takeoff_reference((0.0, 0.6))  # 0.6 m east: behind the start
+    assert via and vz == pytest.approx(1.5) and pz > -4.5, (vz, pz)  # down at MPC_Z_V_AUTO_DN
+    vz, pz, via = _takeoff_reference((0.0, -0.6))  # 0.6 m west: past the takeoff point
+    assert not via and vz < -0.5, vz  # climbing on
+    vz, pz, via = _takeoff_reference((0.6, 0.0))  # 0.6 m beside the line: offtrack
+    assert via and vz < -0.5, vz  # towards the line at the takeoff altitude: still climbing
+    vz, pz, via = _takeoff_reference((0.0, 0.3))  # within the acceptance radius
+    assert not via and vz < -0.5, vz
