@@ -179,6 +179,7 @@ class Vehicle:
             # plugin's noise is the same on every axis
             self.est.gps_lead = 0.0
             self.est.body_noise = (1.0, 1.0)
+            self.est.hold_heading_offset()
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed, config.range_sensor)

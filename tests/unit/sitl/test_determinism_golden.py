@@ -287,26 +287,28 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: stop 28: a takeoff has FlightTaskAuto's track (from where the vehicle was when the triplet came
 #: to the point the navigator took a sample earlier): mission's and crash's takeoffs start
 #: from a point a control tick behind (the navigator's sample), and their flights move by it.
+#: Then EKF2's heading error settles during the first leg (a climb offset, then the flight's,
+#: ekf2.HEADING_SETTLE_TAU): every scenario's heading error, so every flight, changes.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "c3a3524cb65bdd9293394de03fa3b78b425673250abc480d78f2676cfee850b7",
-        "da1d5597d3c60c65147e4921becb4da4fdcd81f9eca93568e073e6c159cf3ca9",
+        "2afcfcedcf4b955ba19c149628e5e3b112f6c90197003c6530eb37d005ff2552",
+        "f9b519a43cc1cde69361d12f57c69d9e2e5cf124332bc0ee9338a52fefdfd4a8",
     ),
     "manual_and_rtl": (
-        "0bb80ad68efe759b5d929a22c08e655268338feff646fef6b9c7900061a24b50",
-        "a3ac5efcbd2465a4bda9e85a703ee8d6be2466dea50aafc4579b3a28b70a6033",
+        "03bbcceb5006660d105f2b3dc6a791c22a474bd1d83ab4f1a32e2cb0a541d3aa",
+        "1c74f24971c1de4442608bd1853f93856f08e9ff19dbe4fc76013a1340edc039",
     ),
     "datalink_loss": (
-        "60fc58a98cdb5cfdfc1782502cec9b6efc548d195c71f6ecb785f78d65fd7862",
-        "c4a06a38305a54cb3c7b5ed58856c49a69b6902f6bbbc0e0b246832b4e06e7e6",
+        "1e1fd7e4182449792d51e1eb7780d7cf1ad3c7120832f5c90f003f749123db92",
+        "c3e6d5edac5654989356c65d226128f339ab2990462ba7642abdf36cde1e2b82",
     ),
     "crash": (
-        "8bccff054221931b967f0a0478e378da29119a374b1965ec37a34c6f794fa2aa",
-        "3b0f74af3194dab93559cff93beada637bd416b35d0a2374a056c2a8b6752428",
+        "fa9fa92afd70976fae801ea8810f3b2b68718a328d0465745b79696da9b08f6a",
+        "86193b82d2c2dae6d7c3b8b9d6dd9d4d91c929f347e9631dab2af88e8a0154e0",
     ),
     "params_and_commands": (
-        "ed19267e3ea88e7e241987b4e7fe5027f25a76eb545d4e264ad7423a6f3a8de8",
-        "5325849cf652212cbecdf5f0fb81ac85312559b98f0de01817350dce4add6c31",
+        "04d7b59952f3dfcf1a14d72c1b9273af10168c95b92a11cc73be50ab4f6bb5d3",
+        "471cee859036bc82b0d3557fec49d6255506746f4cd115d74446ca824793e152",
     ),
 }
 
