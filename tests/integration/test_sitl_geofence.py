@@ -217,9 +217,9 @@ def test_fence_plan_round_trip_and_hold_at_an_exclusion_circle(vehicle):
     v.fly_for(15)
     # PX4 (navigator_main.cpp geofence_breach_check, GF_ACTION_LOITER without GF_PREDICT) holds
     # where the breach was seen: the vehicle brakes past it, then comes back to it. "Forward" is
-    # EKF2's heading, a few degrees off the truth (PX4 SIH: 2.4 +- 2.6 degrees), so 30 m of stick
-    # North end up to a couple of metres East or West
-    assert v.mode == LOITER and v.armed and 29.0 <= v.pos[0] < 33.0 and abs(v.pos[1]) < 3.0
+    # EKF2's heading, a few degrees off the truth (PX4 SIH in flight: +2.7 +- 5.2 degrees, -2.3 +-
+    # 4.6 in the climb), so 30 m of stick North end up to a few metres East or West (seed 3: 4.1)
+    assert v.mode == LOITER and v.armed and 29.0 <= v.pos[0] < 33.0 and abs(v.pos[1]) < 6.0
 
 
 def test_polygon_breach_returns_to_the_closest_rally_point(vehicle, tmp_path: Path):

@@ -103,12 +103,15 @@ class Console:
 @pytest.fixture
 def mavproxy(tmp_path: Path) -> Iterator[Console]:
     port = free_udp_port()
-    with running_sitl(free_running_argv(port, tmp_path / "log", 5)):
-        console = Console(port, tmp_path)
-        try:
+    # MAVProxy first, listening, then the simulator: free-running, it says "Ready for takeoff"
+    # once, which a MAVProxy still starting on a busy machine would miss
+    console = Console(port, tmp_path)
+    try:
+        console.expect(r"Waiting for heartbeat", 60)
+        with running_sitl(free_running_argv(port, tmp_path / "log", 5)):
             yield console
-        finally:
-            console.close()
+    finally:
+        console.close()
 
 
 def test_mavproxy_sets_a_parameter_uploads_and_flies_a_mission(mavproxy: Console, tmp_path: Path) -> None:
