@@ -69,7 +69,9 @@ def _fly(port: int, settle_s: float, second: int) -> dict[str, object]:
         said = {t for t in c.texts if not t.startswith(("Preflight", "Armed", "Executing"))}
         out["texts"] = sorted(t for t in said if not t.startswith("Mission rejected"))
         out["rejected"] = sorted(t for t in said if t.startswith("Mission rejected"))
-        out["climbed, m"] = round(c.max_alt - ground)
+        # a takeoff climbs to 5 m; PX4 SIH's estimated altitude wanders up to ~1.5 m on the ground
+        # armed (its range finder reads below its minimum there, EKF2 follows the baro and GNSS)
+        out["left the ground"] = c.max_alt - ground > 2.5
         return out
     finally:
         c.close()
@@ -85,7 +87,7 @@ def test_a_ground_level_first_waypoint_is_answered_alike_by_px4_sih_and_the_buil
     port = free_udp_port()
     with running_sitl(free_running_argv(port, tmp_path / "builtin", SPEED)):
         ours = _fly(port, settle_s=0, second=second)
-    assert px4["reached"] == [] and px4["climbed, m"] == 0, px4  # PX4 never left the ground
+    assert px4["reached"] == [] and not px4["left the ground"], px4  # PX4 never took off
     assert "Disarmed by auto preflight disarming" in px4["texts"], px4
     assert ("Mission start denied! No valid mission" in px4["texts"]) == (second == TAKEOFF), px4
     expected = ["Mission rejected: takeoff not first waypoint item"] if second == TAKEOFF else []
