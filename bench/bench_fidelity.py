@@ -59,6 +59,7 @@ from uavtest.analysis.fidelity import (
     pairs_within,
     pooled_autocorrelation,
     spread,
+    takeoff_turned_back,
     velocity_errors,
     vertical_estimate_errors,
 )
@@ -150,6 +151,8 @@ class Flights:
     boot_y: list = dataclasses.field(default_factory=list)
     #: every leg's first pass at its waypoint, every flight's together (``first_passes``)
     passes: list[WaypointPass] = dataclasses.field(default_factory=list)
+    #: per flight with a mission_result: whether its takeoff turned back (``takeoff_turned_back``)
+    stalls: list[bool] = dataclasses.field(default_factory=list)
 
     def joined(self, other: Flights) -> Flights:
         """These flights and ``other``'s, every measurement together."""
@@ -173,6 +176,12 @@ def _measure(ulog: ULog, into: Flights) -> None:
         into.boot_y.append((g, ey))
     into.arrival_errors += arrival_velocity_errors(*window)
     into.passes += first_passes(t, lp["x"], lp["y"], setpoint_changes(ulog))
+    if any(d.name == "mission_result" for d in ulog.data_list):
+        mr = ulog.get_dataset("mission_result").data
+        reached = mr["timestamp"][mr["seq_reached"] >= 0] / 1e6
+        flying = t >= traj.t[0]  # from lift-off: before it the estimate may still be converging
+        if len(reached):
+            into.stalls.append(takeoff_turned_back(t[flying], -lp["z"][flying], float(reached[0])))
     att = ulog.get_dataset("vehicle_attitude").data
     vertical = displacement_errors(t[air], lp["z"][air], lp["vz"][air])
     if len(vertical):
@@ -313,6 +322,14 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "first pass at a waypoint: closest, m; missed the acceptance radius; s to acceptance",
             _passes(px4_all.passes),
             _passes(ours_all.passes),
+            "",
+            "",
+        )
+    if px4_all.stalls and ours_all.stalls:
+        t.add_row(
+            "takeoffs that turned back (FlightTaskAuto back to the track's start on the ground)",
+            f"{sum(px4_all.stalls)} of {len(px4_all.stalls)}",
+            f"{sum(ours_all.stalls)} of {len(ours_all.stalls)}",
             "",
             "",
         )

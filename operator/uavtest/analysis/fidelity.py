@@ -63,6 +63,7 @@ __all__ = [
     "pairs_within",
     "pooled_autocorrelation",
     "spread",
+    "takeoff_turned_back",
     "velocity_errors",
     "vertical_estimate_errors",
 ]
@@ -352,6 +353,17 @@ def arrival_velocity_errors(
             out.append(float(np.median(err[window])))
         i = k + 1
     return out
+
+
+def takeoff_turned_back(t: np.ndarray, height: np.ndarray, until: float, drop: float = 1.0) -> bool:
+    """Whether the takeoff stalled as PX4 SIH's sometimes do: before ``until`` (s, when the takeoff
+    was reached) the height fell ``drop`` metres or more below the highest it had been.
+
+    ``t`` (s) and ``height`` (m, up) over the flight: FlightTaskAuto's target went back to the
+    track's start on the ground (``mc_pos_control.Controller.update``) and the vehicle descended.
+    """
+    h = np.asarray(height)[np.asarray(t) < until]
+    return bool(len(h)) and bool(np.any(np.maximum.accumulate(h) - h >= drop))
 
 
 @dataclass(frozen=True, slots=True)

@@ -19,6 +19,7 @@ from uavtest.analysis.fidelity import (
     pairs_within,
     pooled_autocorrelation,
     spread,
+    takeoff_turned_back,
     velocity_errors,
     vertical_estimate_errors,
 )
@@ -273,3 +274,15 @@ def test_vertical_estimate_errors_against_px4_sihs_ground_truth(square_log) -> N
         (136.5, 176.0),
     )
     assert 0.05 < alt < 0.2 and 0.08 < climb < 0.25
+
+
+def test_a_takeoff_that_went_back_down_is_told_from_one_that_climbed_on() -> None:
+    """PX4 SIH mission3 replica 6 (flown here): up to 8.9 m, back to the ground, up again, all
+    before the takeoff was reached; a climb that wobbles by less than a metre is no stall."""
+    t = np.arange(0.0, 30.0, 0.5)
+    stall = np.interp(t, [0, 8, 15, 20, 28], [0.0, 8.9, 0.2, 0.2, 9.6])
+    assert takeoff_turned_back(t, stall, until=28.5)
+    assert not takeoff_turned_back(t, stall, until=8.0)  # reached before it turned back
+    wobble = np.interp(t, [0, 6, 7, 12], [0.0, 6.0, 5.3, 9.6])
+    assert not takeoff_turned_back(t, wobble, until=12.5)
+    assert not takeoff_turned_back(t, wobble, until=-1.0)  # nothing before it

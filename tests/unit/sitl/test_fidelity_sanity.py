@@ -13,10 +13,18 @@ from __future__ import annotations
 import io
 from pathlib import Path
 
+import numpy as np
 import pytest
 from pyulog import ULog
 
-from uavtest.analysis.fidelity import FIGURES, flight_figures, pairs_between, pairs_within, spread
+from uavtest.analysis.fidelity import (
+    FIGURES,
+    flight_figures,
+    pairs_between,
+    pairs_within,
+    spread,
+    takeoff_turned_back,
+)
 from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.recorder import MemorySink
@@ -58,19 +66,6 @@ def test_builtin_flies_the_competition_missions_within_loose_bounds_of_px4(share
     assert spread([f.jitter for f in ours]).high <= JITTER_FACTOR * spread([f.jitter for f in px4]).high
 
 
-def _stalled(samples: list[tuple[float, float, float, float]], until: float) -> bool:
-    """The climb turned back: the true height fell by a metre or more before ``until`` (s, when the
-    takeoff item was reached)."""
-    peak = 0.0
-    for t, _, _, z in samples:
-        if t >= until:
-            return False
-        peak = max(peak, -z)
-        if peak + z >= 1.0:
-            return True
-    return False
-
-
 def test_some_takeoffs_stall_and_recover_as_px4_sihs_do(shared_data: Path) -> None:
     """4 of 32 PX4 v1.15 SIH flights of the competition's missions (2 of 8 of mission3, flown here)
     climbed, went back down to the ground and climbed again: FlightTaskAuto's track states on the
@@ -82,7 +77,8 @@ def test_some_takeoffs_stall_and_recover_as_px4_sihs_do(shared_data: Path) -> No
         config, items = competition(shared_data, 3, seed=seed)
         flight = fly_mission(config, items)
         assert flight.vehicle is not None and not flight.vehicle.crashed
-        if _stalled(flight.samples, flight.reached[0][1]):
+        t, _, _, z = np.array(flight.samples).T
+        if takeoff_turned_back(t, -z, flight.reached[0][1]):
             stalls += 1
             assert [i for i, _ in flight.reached] == list(range(len(items))), f"seed {seed}: {flight.reached}"
             assert flight.landed_s is not None, f"seed {seed} did not land"
