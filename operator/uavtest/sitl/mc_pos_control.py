@@ -615,11 +615,12 @@ class Controller:
         if kind is GoalKind.TAKEOFF:
             # FlightTaskAuto's track states run for a takeoff triplet too. It has no previous
             # waypoint, so its track starts where the vehicle was when the triplet came, a moment
-            # after the navigator took the takeoff point (``Navigator::_start_position``): a
-            # centimetre-short track in the direction the estimate moved. Drifting more than the
-            # acceptance radius behind its start in the climb ("previous in front"), PX4 goes back
-            # down to that start on the ground, and climbs again once within the radius
-            # (PX4 SIH's takeoff stalls); beside the track it climbs towards its closest point
+            # after the navigator took the takeoff point (``Mission::handleTakeoff``, from its own
+            # position sample): a centimetre-short track against the way the estimate moved.
+            # Drifting more than the acceptance radius behind its start in the climb ("previous in
+            # front"), PX4 goes back down to that start on the ground, and climbs again once
+            # within the radius (PX4 SIH's takeoff stalls); beside the track it climbs towards
+            # its closest point
             prev = self._track_prev(goal, x, y, z)
             tx, ty, tz, self.takeoff_via = track_target(goal, x, y, z, lim.acc_rad, prev)
         if kind is GoalKind.POSITION or self.takeoff_via:
