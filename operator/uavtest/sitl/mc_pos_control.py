@@ -612,8 +612,8 @@ class Controller:
             return 0.0, 0.0, GRAVITY, 0.0
         self._velocity_derivative(dt, vx, vy)
         self.takeoff_via = False
-        if kind is GoalKind.TAKEOFF:
-            # FlightTaskAuto's track states run for a takeoff triplet too. It has no previous
+        if kind is GoalKind.POSITION or kind is GoalKind.TAKEOFF:
+            # FlightTaskAuto's track states, for a takeoff triplet too. It has no previous
             # waypoint, so its track starts where the vehicle was when the triplet came, a moment
             # after the navigator took the takeoff point (``Mission::handleTakeoff``, from its own
             # position sample): a centimetre-short track against the way the estimate moved.
@@ -621,17 +621,13 @@ class Controller:
             # front"), PX4 goes back down to that start on the ground, and climbs again once
             # within the radius (PX4 SIH's takeoff stalls); beside the track it climbs towards
             # its closest point
+            acc_rad = goal.acc_rad if goal.acc_rad == goal.acc_rad else lim.acc_rad
             prev = self._track_prev(goal, x, y, z)
-            tx, ty, tz, self.takeoff_via = track_target(goal, x, y, z, lim.acc_rad, prev)
+            tx, ty, tz, via = track_target(goal, x, y, z, acc_rad, prev)
+            self.takeoff_via = via and kind is GoalKind.TAKEOFF
         if kind is GoalKind.POSITION or self.takeoff_via:
             speed = goal.speed if goal.speed == goal.speed else lim.cruise
             speed = min(speed, lim.vel_max)
-            acc_rad = goal.acc_rad if goal.acc_rad == goal.acc_rad else lim.acc_rad
-            if kind is GoalKind.POSITION:
-                prev = self._track_prev(goal, x, y, z)
-                tx, ty, tz, via = track_target(goal, x, y, z, acc_rad, prev)
-            else:
-                via = True
             # PositionSmoothing's waypoints {trajectory, target, next}: an internal waypoint before
             # the target is passed towards the target; the target towards the triplet's next
             nxt = (goal.x, goal.y, goal.z) if via else goal.next

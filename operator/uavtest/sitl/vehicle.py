@@ -526,7 +526,8 @@ class Vehicle:
         self.wind.update(dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:
             self.world.refresh_near(self.body.x, self.body.y)
-        self.nav.position_sample = (self.st.x, self.st.y)  # the navigator samples a tick behind
+        nav, st = self.nav, self.st
+        nav.sample_x, nav.sample_y = st.x, st.y  # the navigator samples a tick behind
         self._estimate()
         sim = self.sim
         faulty = sim.faulty

@@ -192,11 +192,11 @@ class Navigator:
         #: the vehicle's state at the latest update (landed, x, y): what PX4's FeasibilityChecker
         #: reads when it checks a mission; None before the first (landed at the origin)
         self._latest: State | None = None
-        #: the estimate's horizontal position (x, y) as the navigator last sampled it: PX4's
-        #: navigator polls vehicle_local_position at 20 Hz, behind the flight task's sample, so a
-        #: point it takes (the takeoff's) is a little behind where FlightTaskAuto sees the vehicle.
-        #: Set by the vehicle each control tick to the previous tick's estimate; None: the current
-        self.position_sample: tuple[float, float] | None = None
+        #: the estimate's horizontal position as the navigator last sampled it: PX4's navigator
+        #: polls vehicle_local_position at 20 Hz, behind the flight task's sample, so a point it
+        #: takes (the takeoff's) is a little behind where FlightTaskAuto sees the vehicle. Set by
+        #: the vehicle each control tick to the previous tick's estimate; NaN: the current one
+        self.sample_x = self.sample_y = math.nan
         self.failure = False  # mission_result.failure: a forced heading not reached in MIS_YAW_TMT
         #: MissionBase::_mission_init_climb_altitude_amsl as a local z: the climb owed before the
         #: first position item (checkClimbRequired on activation), None when none is
@@ -687,7 +687,8 @@ class Navigator:
             climb = s.z
         if climb is not None and climb < st.z:
             # Mission::handleTakeoff climbs from the navigator's global position
-            tx, ty = self.position_sample or (st.x, st.y)
+            sampled = self.sample_x == self.sample_x
+            tx, ty = (self.sample_x, self.sample_y) if sampled else (st.x, st.y)
             s.extra.update(tx=tx, ty=ty, cz=climb)
             if st.landed:
                 s.extra["ground"] = 1.0
