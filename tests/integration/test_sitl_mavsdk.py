@@ -63,7 +63,16 @@ def test_mavsdk_reads_telemetry_uploads_arms_and_flies_a_mission(sitl_port: int)
     eventually(telemetry.armed, 10, "armed")
     mission.start_mission()
     eventually(lambda: telemetry.position().relative_altitude_m > 6, 30, "the takeoff")
-    eventually(mission.is_mission_finished, 60, "the mission to finish")
+    rates: list[tuple[float, float, float]] = []
+
+    def finished_sampling_rates() -> bool:  # the body rates MAVSDK reads (ATTITUDE) on the legs
+        w = telemetry.attitude_angular_velocity_body()
+        rates.append((w.roll_rad_s, w.pitch_rad_s, w.yaw_rad_s))
+        return mission.is_mission_finished()
+
+    eventually(finished_sampling_rates, 60, "the mission to finish")
+    # the vehicle leans into each leg and out of it, and turns: it reports rolling and pitching
+    assert max(abs(r[0]) for r in rates) > 0.05 and max(abs(r[1]) for r in rates) > 0.05, rates
     eventually(lambda: not telemetry.armed(), 30, "disarm after landing")
     eventually(lambda: telemetry.landed_state() == LandedState.ON_GROUND, 5, "landed state on ground")
     pos = telemetry.position()

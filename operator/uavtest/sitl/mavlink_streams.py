@@ -42,8 +42,10 @@ def local_position_ned(v: Vehicle, t: int) -> Msg:
 
 
 def attitude(v: Vehicle, t: int) -> Msg:
+    """streams/ATTITUDE.hpp: vehicle_attitude's Euler angles, vehicle_angular_velocity's body rates."""
     b = v.body
     roll, pitch = b.tilt()
+    p, q, r = b.rates()
     return Msg(
         "ATTITUDE",
         {
@@ -51,9 +53,9 @@ def attitude(v: Vehicle, t: int) -> Msg:
             "roll": roll,
             "pitch": pitch,
             "yaw": v.st.yaw,
-            "rollspeed": 0.0,
-            "pitchspeed": 0.0,
-            "yawspeed": b.yawrate,
+            "rollspeed": p,
+            "pitchspeed": q,
+            "yawspeed": r,
         },
     )
 
@@ -171,6 +173,7 @@ def isa_pressure_hpa(alt_amsl: float) -> float:
 def attitude_quaternion(v: Vehicle, t: int) -> Msg:
     """streams/ATTITUDE_QUATERNION.hpp: vehicle_attitude.q (w, x, y, z), body rates."""
     q = quaternion(*_attitude(v))
+    p, q_rate, r = v.body.rates()
     return Msg(
         "ATTITUDE_QUATERNION",
         {
@@ -179,9 +182,9 @@ def attitude_quaternion(v: Vehicle, t: int) -> Msg:
             "q2": q[1],
             "q3": q[2],
             "q4": q[3],
-            "rollspeed": 0.0,
-            "pitchspeed": 0.0,
-            "yawspeed": v.body.yawrate,
+            "rollspeed": p,
+            "pitchspeed": q_rate,
+            "yawspeed": r,
             "repr_offset_q": [0.0, 0.0, 0.0, 0.0],
         },
     )
@@ -197,6 +200,7 @@ def odometry(v: Vehicle, t: int) -> Msg:
     pose_cov[11] = 0.08**2  # ekf2.SIGMA_Z
     pose_cov[15] = pose_cov[18] = pose_cov[20] = 0.005**2
     vel_cov[0] = vel_cov[6] = vel_cov[11] = 0.03**2
+    p, q, r = b.rates()  # vehicle_odometry.angular_velocity: body rates
     return Msg(
         "ODOMETRY",
         {
@@ -210,9 +214,9 @@ def odometry(v: Vehicle, t: int) -> Msg:
             "vx": b.vx + e.evx,
             "vy": b.vy + e.evy,
             "vz": b.vz + e.evz,
-            "rollspeed": 0.0,
-            "pitchspeed": 0.0,
-            "yawspeed": b.yawrate,
+            "rollspeed": p,
+            "pitchspeed": q,
+            "yawspeed": r,
             "pose_covariance": pose_cov,
             "velocity_covariance": vel_cov,
             "reset_counter": 0,
@@ -256,6 +260,7 @@ def highres_imu(v: Vehicle, t: int) -> Msg:
         fd = b.az - DRAG_VERTICAL * (b.vz - w.d) - GRAVITY
     ax, ay, az = _to_body(roll, pitch, yaw, fn, fe, fd)
     mx, my, mz = _to_body(roll, pitch, yaw, *MAG_NED)
+    gx, gy, gz = b.rates()
     alt = v.home_alt - b.z
     return Msg(
         "HIGHRES_IMU",
@@ -264,9 +269,9 @@ def highres_imu(v: Vehicle, t: int) -> Msg:
             "xacc": ax,
             "yacc": ay,
             "zacc": az,
-            "xgyro": 0.0,
-            "ygyro": 0.0,
-            "zgyro": b.yawrate,
+            "xgyro": gx,
+            "ygyro": gy,
+            "zgyro": gz,
             "xmag": mx,
             "ymag": my,
             "zmag": mz,

@@ -189,6 +189,9 @@ class Body:
         "ax",
         "ay",
         "az",
+        "cax",
+        "cay",
+        "caz",
         "delay_i",
         "delay_x",
         "delay_y",
@@ -221,6 +224,8 @@ class Body:
         self.x = self.y = self.z = 0.0
         self.vx = self.vy = self.vz = 0.0
         self.ax = self.ay = self.az = 0.0  # acceleration from thrust (without gravity), NED
+        # what the acceleration is moving toward (the delayed command of the last step): its rate
+        self.cax = self.cay = self.caz = 0.0
         self.yaw = 0.0
         self.yawrate = 0.0
         #: PX4's yaw rate loop and SIH's yaw torque (``mc_rate_control``); None: the Gazebo
@@ -252,6 +257,7 @@ class Body:
             dx[i], cax = cax, dx[i]
             dy[i], cay = cay, dy[i]
             self.delay_i = i + 1 if i + 1 < len(dx) else 0
+        self.cax, self.cay, self.caz = cax, cay, caz
         k = dt / self.tau_tilt
         self.ax += (cax - self.ax) * k
         self.ay += (cay - self.ay) * k
@@ -323,3 +329,28 @@ class Body:
         if lift <= 0.1:
             lift = 0.1
         return math.atan2(right, lift), -math.atan2(fwd, lift)
+
+    def rates(self) -> tuple[float, float, float]:
+        """Body rates (FRD, rad/s) of the attitude ``tilt`` and ``yaw`` describe, as a gyro reads
+        them (PX4's ``vehicle_angular_velocity``): the Euler angles' rates, from the rates of the
+        first-order responses in ``step``, turned into the body frame."""
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        yr = self.yawrate
+        dax = (self.cax - self.ax) / self.tau_tilt
+        day = (self.cay - self.ay) / self.tau_tilt
+        fwd = c * self.ax + s * self.ay
+        right = -s * self.ax + c * self.ay
+        dfwd = c * dax + s * day + yr * right
+        dright = -s * dax + c * day - yr * fwd
+        lift = GRAVITY - self.az
+        dlift = -(self.caz - self.az) / TAU_THRUST
+        if lift <= 0.1:  # tilt's floor: the angles do not move with it
+            lift, dlift = 0.1, 0.0
+        roll = math.atan2(right, lift)
+        pitch = -math.atan2(fwd, lift)
+        droll = (dright * lift - right * dlift) / (right * right + lift * lift)
+        dpitch = -(dfwd * lift - fwd * dlift) / (fwd * fwd + lift * lift)
+        sr, cr = math.sin(roll), math.cos(roll)
+        sp, cp = math.sin(pitch), math.cos(pitch)
+        # ZYX Euler angle rates to body rates
+        return droll - yr * sp, dpitch * cr + yr * sr * cp, -dpitch * sr + yr * cr * cp

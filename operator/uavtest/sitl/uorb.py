@@ -43,6 +43,7 @@ __all__ = [
     "PositionSetpoint",
     "PositionSetpointTriplet",
     "TrajectorySetpoint",
+    "VehicleAngularVelocity",
     "VehicleAttitude",
     "VehicleAttitudeGroundtruth",
     "VehicleCommand",
@@ -201,6 +202,17 @@ class VehicleAttitude:
     q: tuple[float, float, float, float] = ulog("float[4]")
     delta_q_reset: tuple[float, float, float, float] = ulog("float[4]")
     quat_reset_counter: int = ulog("uint8_t")
+
+
+@topic("vehicle_angular_velocity")
+@dataclass(slots=True)
+class VehicleAngularVelocity:
+    """Body rates (FRD, rad/s) as the gyro reads them, and their rate of change."""
+
+    timestamp: int = ulog("uint64_t")
+    timestamp_sample: int = ulog("uint64_t")
+    xyz: tuple[float, float, float] = ulog("float[3]")
+    xyz_derivative: tuple[float, float, float] = ulog("float[3]")
 
 
 @topic("vehicle_attitude_groundtruth")

@@ -220,6 +220,7 @@ class Vehicle:
         self.time_us = 0
         self._next_us = STEP_US
         self._tick = 0
+        self._logged_rates = (0, 0.0, 0.0, 0.0)  # (t us, p, q, r) of the last vehicle_angular_velocity
         self._text_id = 0  # STATUSTEXT.id of the last chunked text
         self._cmd = IDLE
         # broadcast messages (every link) are Msg; with several links, one link's telemetry is
@@ -841,6 +842,15 @@ class Vehicle:
             # the truth next to the estimate, as PX4 SITL logs it (SIH's *_groundtruth topics)
             qt = topics.quaternion(roll, pitch, b.yaw)
             rec.data(topics.VehicleAttitudeGroundtruth(t, t, qt, (0.0, 0.0, 0.0, 0.0), 0))
+            p, q_rate, r = b.rates()
+            t0, p0, q0, r0 = self._logged_rates
+            k = 1e6 / (t - t0) if t > t0 else 0.0
+            rec.data(
+                topics.VehicleAngularVelocity(
+                    t, t, (p, q_rate, r), ((p - p0) * k, (q_rate - q0) * k, (r - r0) * k)
+                )
+            )
+            self._logged_rates = (t, p, q_rate, r)
         if tick % (CONTROL_EVERY * 5) == 0:  # 10 Hz
             rec.data(
                 topics.local_position(
