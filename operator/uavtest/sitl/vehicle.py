@@ -180,6 +180,7 @@ class Vehicle:
             self.est.gps_lead = 0.0
             self.est.body_noise = (1.0, 1.0)
             self.est.hold_heading_offset()
+            self.est.smooth_velocity(0.0)  # its flights were calibrated with the unsmoothed error
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed, config.range_sensor)
