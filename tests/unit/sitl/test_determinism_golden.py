@@ -295,22 +295,24 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: array-identical before and after).
 #: Then EKF2's horizontal velocity error low-passed (ekf2.VELOCITY_SMOOTH_S, as smooth as PX4 SIH's
 #: against its ground truth): the velocity estimate, so every flight, changes.
+#: Then EKF2's heading error after the first leg's start as PX4 SIH's (a delayed rise toward a
+#: decaying target, ekf2.HEADING_PEAK / HEADING_DECAY_TAU): every flight that moves, changes.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "8532d614dc1894b50a17908d2f60d444a9f093f659363e4250a165397163d691",
-        "2c00be2322ed42c2d42a37c237c0419e04cb068d0be248e73d90a6ed26c372d6",
+        "b062225bd75888b4b82d250d352b2e8ef6924699cf105faa4c6a9aa3480458ab",
+        "8f633e906006fac3e1e2b64526c92f4047aa59f83064425f36b40fd351501cf3",
     ),
     "manual_and_rtl": (
-        "d85e8c0fd51bc7634517b56f0959a6c074b94d78c8783399561d79f2becef7f7",
-        "e826bb5fb408a3c973a377332cdec7d98fbedefe9ad5480a821657c3bf9ee289",
+        "5809e81103b7d8e707baef9513b3c6cdfe65e52cde769f9c8b195dabc478becc",
+        "2caaeeb6da10b39d588c170b46c69e3d722b4cccc21a28299d2cd330dbe4d64e",
     ),
     "datalink_loss": (
         "ca7be087a00663a3b68af12dc8bc63d379f1b7b2820f4f9fcce189714eb56d0b",
         "199475b466ca4a9a346def0151c3f16e49424ac45a0d28355b2c222c927a57c5",
     ),
     "crash": (
-        "614bea8c2707a811f665a95255bd711cd3293ae558adb8b2987dd544ad232fc0",
-        "b81eac27d3e69f7db5df2efd7b6a23a3bb16479dc3580a334e8b0716960130b4",
+        "00d893a9be1407297bf6107856e833f0cec1e8d13012bb559ec5d95a6acb7308",
+        "210e871bca1541595e27155d481166eea4844899244b843e8d30c1680caac512",
     ),
     "params_and_commands": (
         "c32854caf088d3fcc48bcaa8bba6e5b65b3585da85d7f82c778ea3695d0f4894",

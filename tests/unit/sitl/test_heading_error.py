@@ -36,35 +36,38 @@ from .conftest import competition
 
 
 def test_the_heading_error_has_px4_sihs_offset_and_spread() -> None:
-    climbs, flights, within, half = [], [], [], []
+    """24 PX4 v1.15 SIH flights of the competition's missions against their ground truth
+    (2026-11-27, stop 29), timed from the moment the vehicle first moves faster than 1.5 m/s: the
+    heading error is -1.8 degrees in the climb (4.9 between flights), +1.9 at 4 s, +5.3 at 6-12 s
+    (3.5 between flights; correlated with the climb's by -0.5), +2.7 at 24-40 s (3.5), +0.5 at
+    44-56 s."""
+    climbs, early, late, later, at4 = [], [], [], [], []
     for seed in range(60):
         e = Estimator(random.Random(seed), random.Random(seed + 1000), random.Random(seed + 2000))
         samples = []
-        for k in range(50 * 50):  # 10 s of climb, then a 40 s leg at 4 m/s, at 50 Hz
+        for k in range(50 * 70):  # 10 s of climb, then a 60 s leg at 4 m/s, at 50 Hz
             moving = k >= 50 * 10
             e.update(0.02, 4.0 if moving else 0.0, 0.0)
             samples.append(math.degrees(e.eh))
-        climb, flight = samples[: 50 * 10], samples[50 * 26 :]  # the leg's first 16 s left out
-        climbs.append(statistics.fmean(climb))
-        flights.append(statistics.fmean(flight))
-        within.append(statistics.pstdev(flight))
-        # the offset half-way from the climb's to the flight's: ln 2 x HEADING_SETTLE_TAU after
-        offsets = []
-        e2 = Estimator(random.Random(seed), random.Random(seed + 1000), random.Random(seed + 2000))
-        start, end = e2.eh_offset, e2.eh_flight
-        for k in range(50 * 15):
-            e2.update(0.02, 0.0 if k < 50 else 4.0, 0.0)
-            offsets.append(e2.eh_offset)
-        if abs(end - start) > math.radians(2.0):
-            half.append(
-                next(k for k, o in enumerate(offsets) if abs(o - start) >= abs(end - start) / 2) / 50 - 1.0
-            )
+
+        def mean(a: float, b: float, samples: list[float] = samples) -> float:  # seconds after moving
+            return statistics.fmean(samples[int(50 * (10 + a)) : int(50 * (10 + b))])
+
+        climbs.append(statistics.fmean(samples[: 50 * 10]))
+        at4.append(mean(3.5, 4.5))
+        early.append(mean(6, 12))
+        late.append(mean(24, 40))
+        later.append(mean(44, 56))
     assert -3.5 < statistics.fmean(climbs) < -1.0
     assert 3.0 < statistics.pstdev(climbs) < 6.0
-    assert 1.5 < statistics.fmean(flights) < 4.0
-    assert 4.0 < statistics.pstdev(flights) < 6.5
-    assert 1.2 < statistics.fmean(within) < 2.8
-    assert 3.6 < statistics.median(half) < 4.4  # PX4: 4.0 s after the vehicle first exceeds 1.5 m/s
+    assert 0.5 < statistics.fmean(at4) < 3.0  # PX4 +1.9: the settling starts about 3 s in
+    assert 4.0 < statistics.fmean(early) < 6.5
+    assert 2.5 < statistics.pstdev(early) < 4.5
+    assert 1.5 < statistics.fmean(late) < 4.0
+    assert 2.5 < statistics.pstdev(late) < 4.5
+    assert -1.0 < statistics.fmean(later) < 2.0
+    assert statistics.correlation(climbs, early) < -0.2
+    assert statistics.correlation(early, late) > 0.4  # PX4 0.69
 
 
 def test_the_local_planners_system_keeps_one_heading_offset() -> None:
@@ -95,7 +98,7 @@ def _cross_track(offset_deg: float) -> float:
             at(2, MavCmd.NAV_LAND, 50.0, 0.0),
         ]
     )
-    v.est.eh_offset = v.est.eh_flight = math.radians(offset_deg)
+    v.est.hold_heading_offset(math.radians(offset_deg))
     v.est._ch = 0.0  # the fixed part alone
     v.fly_until(lambda v: v.ready, 10_000_000)
     assert _command(v, MavCmd.COMPONENT_ARM_DISARM, 1.0) == 0
