@@ -27,8 +27,8 @@ as the climb's offset (``HEADING_CLIMB_*``, their own random stream), then a fir
 ``HEADING_PEAK`` and decays to ``HEADING_FINAL`` (``HEADING_DECAY_TAU``), shifted per flight
 (``HEADING_FLIGHT_SPREAD``, correlated with the climb's offset), plus a Gauss-Markov process
 (``SIGMA_HEADING``, ``TAU_HEADING``), low-passed (``HEADING_SMOOTH_S``) so that the logged heading
-is as smooth as PX4's. The vehicle
-leans its thrust against it: PX4's attitude controller tilts the estimated body.
+is as smooth as PX4's. The vehicle leans its thrust against it: PX4's attitude controller tilts the
+estimated body.
 
 On top of that, the horizontal velocity estimate carries a bias that the position does *not*
 integrate. PX4 v1.15 SIH logs its ground truth (``square-mission.ulg``,
@@ -231,9 +231,9 @@ class Estimator:
         self.ex, self.ey, self.ez = g(0, SIGMA_XY), g(0, SIGMA_XY), g(0, SIGMA_Z)
         self._ch = g(0, SIGMA_HEADING * _HEADING_SCALE)
         self._chs = self._ch / _HEADING_SCALE  # the smoothed heading error (before the offset)
-        #: the heading error's per-flight offsets, from their own stream (the other errors of a seed
-        #: stay what they were before they were calibrated): in flight, and in the climb before
-        #: the first leg; ``eh_offset`` is the one now (``update`` moves it from one to the other)
+        #: the heading error's per-flight draws, from their own stream (the other errors of a seed
+        #: stay what they were before they were calibrated): the climb's offset, and the flight's
+        #: shift of the settling target; ``eh_offset`` is the offset now (``update`` moves it)
         rh = rng_heading or random.Random(0)
         self._eh_draw = rh.gauss(0.0, 1.0)
         self.eh_offset = rh.gauss(HEADING_CLIMB_MEAN, HEADING_CLIMB_SPREAD)
