@@ -63,6 +63,9 @@ def _fly(port: int, settle_s: float, second: int) -> dict[str, object]:
         assert c.command(mavlink2.MAV_CMD_COMPONENT_ARM_DISARM, 1, settle=0) == ACCEPTED
         out["start"] = c.command(mavlink2.MAV_CMD_MISSION_START, 0, 0)
         c.until(lambda: not c.armed, 60, "disarmed")
+        # PX4 sends the disarm's STATUSTEXT through its log queue: it may come after the
+        # heartbeat that says disarmed (PX4 SIH once, 2026-11-27)
+        c.settle(2)
         out["reached"] = sorted(set(c.reached))
         # the rejection's own text is kept apart: PX4 SIH said it once armed in one run, not at all
         # in another (the built-in vehicle says it at the upload)

@@ -80,6 +80,10 @@ class Goal:
     #: POSITION: position_setpoint_triplet.next (x, y, z), the waypoint after the target that the
     #: trajectory turns towards without stopping; NaN: none (stop at the target)
     next: tuple[float, float, float] = NO_NEXT
+    #: LAND: the altitude (AMSL) position_setpoint_triplet.current carries, as PX4's navigator sets
+    #: it: the mission's land item's, the Return destination's, Land mode's 0 (set_land_item); NaN:
+    #: the goal's z. Logged only: the descent does not follow it
+    alt_amsl: float = math.nan
 
 
 @dataclass(frozen=True, slots=True)

@@ -944,7 +944,8 @@ class Vehicle:
         lat, lon = self.proj.reproject(g.x, g.y)
         speed = g.speed if g.speed == g.speed else self.limits.cruise
         acc = g.acc_rad if g.acc_rad == g.acc_rad else self.params["NAV_ACC_RAD"]
-        cur = topics.setpoint(t, lat, lon, self.home_alt - g.z, g.yaw, kind, acc, speed)
+        alt = g.alt_amsl if g.alt_amsl == g.alt_amsl else self.home_alt - g.z
+        cur = topics.setpoint(t, lat, lon, alt, g.yaw, kind, acc, speed)
         # the track's start and the corner after the target, as PX4's navigator publishes them
         # (Mission::setActiveMissionItems); both logged as position setpoints
         prev = nxt = topics.INVALID_SETPOINT

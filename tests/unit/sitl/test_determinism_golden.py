@@ -297,17 +297,20 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: against its ground truth): the velocity estimate, so every flight, changes.
 #: Then EKF2's heading error after the first leg's start as PX4 SIH's (a delayed rise toward a
 #: decaying target, ekf2.HEADING_PEAK / HEADING_DECAY_TAU): every flight that moves, changes.
+#: Then the logged land setpoint's altitude as PX4's navigator sets it (Goal.alt_amsl): the ULog of
+#: every scenario that lands changes (mission, manual_and_rtl, datalink_loss); every message hash,
+#: crash's and params_and_commands' ULog unchanged.
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "b062225bd75888b4b82d250d352b2e8ef6924699cf105faa4c6a9aa3480458ab",
+        "6851b73a6f3f7ab73c9cef35df644ec99094d926c126ea4281c0d41f7282ee15",
         "8f633e906006fac3e1e2b64526c92f4047aa59f83064425f36b40fd351501cf3",
     ),
     "manual_and_rtl": (
-        "5809e81103b7d8e707baef9513b3c6cdfe65e52cde769f9c8b195dabc478becc",
+        "286ed2447a918ddda6c1dd809765241f6009da8c396111d40adef46c3ad3e915",
         "2caaeeb6da10b39d588c170b46c69e3d722b4cccc21a28299d2cd330dbe4d64e",
     ),
     "datalink_loss": (
-        "ca7be087a00663a3b68af12dc8bc63d379f1b7b2820f4f9fcce189714eb56d0b",
+        "67b03baf4655418227a2656d8a18a4d5d4c5468aa116a7ee9a53b79b2c416b33",
         "199475b466ca4a9a346def0151c3f16e49424ac45a0d28355b2c222c927a57c5",
     ),
     "crash": (

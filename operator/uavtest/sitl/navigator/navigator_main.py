@@ -465,7 +465,9 @@ class Navigator:
         if ns == NavState.AUTO_LAND:
             if st.landed:  # Land::on_active: landed → the idle setpoint (motors at idle, armed)
                 return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
-            return self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
+            g = self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
+            g.alt_amsl = 0.0  # MissionBlock::set_land_item: altitude 0, not relative
+            return g
         if ns == NavState.AUTO_RTL:
             if s.rtl is None:
                 s.rtl = self._rtl_start(st, now)
@@ -490,6 +492,7 @@ class Navigator:
         g.prev = NO_TRACK
         g.acc_rad = math.nan
         g.next = NO_NEXT
+        g.alt_amsl = math.nan
         return g
 
     # ------------------------------------------------------------------ mission
@@ -660,7 +663,9 @@ class Navigator:
             if st.landed:
                 self._finish(st)
                 return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
-            return self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
+            g = self._goal_set(GoalKind.LAND, s.x, s.y, st.z, s.yaw)
+            g.alt_amsl = self.home_alt + item.alt_rel(self.home_alt)  # the land item's altitude
+            return g
         return self._goal_set(GoalKind.POSITION, s.x, s.y, s.z, s.yaw)
 
     def _start_position_item(self, item: NavItem, st: State) -> None:
@@ -848,5 +853,7 @@ class Navigator:
             if st.landed:
                 r.phase = "done"
             else:
-                return self._goal_set(GoalKind.LAND, hx, hy, st.z, r.yaw)
+                g = self._goal_set(GoalKind.LAND, hx, hy, st.z, r.yaw)
+                g.alt_amsl = self.home_alt  # RtlDirect's land item: the destination's altitude
+                return g
         return self._goal_set(GoalKind.IDLE, st.x, st.y, 0.0)
