@@ -314,6 +314,16 @@ class Estimator:
         self._eh_held = True
         self.eh = self._chs + self.eh_offset
 
+    def gazebo_system(self) -> None:
+        """EKF2 in the local planner's system (PX4 with PX4-Avoidance in Gazebo), as its flights were
+        calibrated: Gazebo's GPS plugin delays its fixes as EKF2 assumes (no lead), its IMU plugin
+        has one noise density on every axis, one heading offset all flight, the velocity error
+        unsmoothed."""
+        self.gps_lead = 0.0
+        self.body_noise = (1.0, 1.0)
+        self.hold_heading_offset()
+        self.smooth_velocity(0.0)
+
     def smooth_velocity(self, seconds: float) -> None:
         """Low-pass the random part of the horizontal velocity error at ``seconds`` (0: not)."""
         self._vs_time = seconds
@@ -367,11 +377,11 @@ class Estimator:
             kv, kb = self._vs_gain
             self._vsx += (kv * self._cvx + kb * self.bx - self._vsx) * k
             self._vsy += (kv * self._cvy + kb * self.by - self._vsy) * k
-            self.evx = self._vsx + vlead * ax
-            self.evy = self._vsy + vlead * ay
+            rx, ry = self._vsx, self._vsy
         else:
-            self.evx = self._cvx + self.bx + vlead * ax
-            self.evy = self._cvy + self.by + vlead * ay
+            rx, ry = self._cvx + self.bx, self._cvy + self.by
+        self.evx = rx + vlead * ax
+        self.evy = ry + vlead * ay
         self._vx_prev, self._vy_prev = vx, vy
         self.bz = ab * self.bz + bb * (SIGMA_BIAS_Z / SIGMA_BIAS) * self._rng_z.gauss(0.0, 1.0)
         self.evz = self._cvz + self.bz + self.vz_shift

@@ -175,12 +175,8 @@ class Vehicle:
             random.Random(f"{seed}:estimator-heading"),
             random.Random(f"{seed}:estimator-ground"),
         )
-        if planner:  # Gazebo's GPS plugin delays its fixes as EKF2 assumes: no lead; its IMU
-            # plugin's noise is the same on every axis
-            self.est.gps_lead = 0.0
-            self.est.body_noise = (1.0, 1.0)
-            self.est.hold_heading_offset()
-            self.est.smooth_velocity(0.0)  # its flights were calibrated with the unsmoothed error
+        if planner:
+            self.est.gazebo_system()
         # battery, GPS, failure injection / detection: one attribute (CPython 3.11 specialises
         # self.x loads only while an instance has at most 30 attributes -- keep Vehicle below)
         self.sim = Simulation(self.params, seed, config.range_sensor)
