@@ -50,6 +50,7 @@ from uavtest.analysis.fidelity import (
     arrival_velocity_errors,
     body_frame_errors,
     boot_time_correlation,
+    braking_velocity_errors,
     displacement_errors,
     displacement_grid,
     estimate_errors,
@@ -146,6 +147,8 @@ class Flights:
     lead: list[float] = dataclasses.field(default_factory=list)
     #: per such flight: EKF2's velocity error std fore-aft and sideways (body frame)
     body: list[tuple[float, float]] = dataclasses.field(default_factory=list)
+    #: per leg of such flights: EKF2's velocity error along / across it, braking into its end
+    braking: list[tuple[float, float]] = dataclasses.field(default_factory=list)
     #: per flight and axis: (log time, velocity error) in the air, for ``boot_time_correlation``
     boot_x: list = dataclasses.field(default_factory=list)
     boot_y: list = dataclasses.field(default_factory=list)
@@ -205,6 +208,9 @@ def _measure(ulog: ULog, into: Flights) -> None:
         into.lead.append(estimate_lead(t, estimate, gt["timestamp"] / 1e6, truth, flown))
         velocity = np.column_stack([lp["vx"], lp["vy"], lp["heading"]])
         into.body.append(body_frame_errors(t, velocity, gt["timestamp"] / 1e6, truth[:, 2:], flown))
+        into.braking += braking_velocity_errors(
+            t, estimate, gt["timestamp"] / 1e6, truth[:, 2:], setpoint_changes(ulog)
+        )
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
     q = np.column_stack([att[f"q[{i}]"] for i in range(4)])
@@ -372,6 +378,14 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "",
             "",
         )
+        t.add_row(
+            "EKF2 velocity error against the ground truth braking into a waypoint (0-3 s after "
+            "acceptance): along / across the leg, mean, m/s",
+            _pair_means(px4_all.braking, "legs"),
+            _pair_means(ours_all.braking, "legs"),
+            "",
+            "",
+        )
     if px4_all.body and ours_all.body:
         t.add_row(
             "EKF2 velocity error against the ground truth, body frame: fore-aft / sideways std, m/s",
@@ -432,11 +446,11 @@ def _spread(values: list[float]) -> str:
     return f"{np.mean(values):.3f} ({min(values):.3f}–{max(values):.3f}, {len(values)} flights)"
 
 
-def _pair_means(pairs: list[tuple[float, float]]) -> str:
+def _pair_means(pairs: list[tuple[float, float]], what: str = "flights") -> str:
     """Per-flight pairs (position / velocity, fore-aft / sideways): each one's mean over flights."""
     a = statistics.mean(p[0] for p in pairs)
     b = statistics.mean(p[1] for p in pairs)
-    return f"{a:.2f} / {b:.2f} ({len(pairs)} flights)"
+    return f"{a:.2f} / {b:.2f} ({len(pairs)} {what})"
 
 
 def _boot(flights: Flights) -> str:

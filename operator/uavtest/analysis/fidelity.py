@@ -25,6 +25,11 @@ And from the logged velocity next to the logged position (``arrival_velocity_err
   velocity estimate does not (0.19-0.21 m/s standard deviation): the velocity loop flies the
   estimate, so this error is how far off a waypoint the vehicle holds (error / ``MPC_XY_P``) and
   whether it makes the acceptance radius at once or creeps onto it.
+
+And against a logged ground truth (PX4 SIH's ``vehicle_local_position_groundtruth``):
+``estimate_errors``, ``estimate_lead``, ``body_frame_errors``, and ``braking_velocity_errors``,
+the velocity error along and across a leg as the vehicle brakes into its waypoint (EKF2 misses
+part of the braking, and its heading error turns the rest sideways).
 """
 
 from __future__ import annotations
@@ -52,6 +57,7 @@ __all__ = [
     "arrival_velocity_errors",
     "body_frame_errors",
     "boot_time_correlation",
+    "braking_velocity_errors",
     "compare",
     "displacement_errors",
     "displacement_grid",
@@ -352,6 +358,50 @@ def arrival_velocity_errors(
         if g[k] + ARRIVAL_WINDOW <= g[-1]:
             out.append(float(np.median(err[window])))
         i = k + 1
+    return out
+
+
+BRAKING_WINDOW = (0.0, 3.0)  # s after a waypoint's acceptance: the end of the braking and after
+BRAKING_LEG_MIN = 5.0  # m: a target set this far from the vehicle is a leg braked into
+
+
+def braking_velocity_errors(
+    t: np.ndarray,
+    estimate: np.ndarray,
+    t_truth: np.ndarray,
+    truth: np.ndarray,
+    changes: np.ndarray,
+    window: tuple[float, float] = BRAKING_WINDOW,
+    rate: float = 10.0,
+) -> list[tuple[float, float]]:
+    """EKF2's horizontal velocity error against the ground truth as the vehicle brakes into a
+    waypoint: per leg, the mean over ``window`` seconds after the navigator accepted it (the
+    triplet's next change), along the leg and across it (to its right), m/s.
+
+    ``t``, ``estimate``: the logged position and velocity, (N, 4) x, y, vx, vy; ``t_truth``,
+    ``truth``: the ground truth's velocity, (M, 2) vx, vy; ``changes``: the setpoint triplet's
+    changes (``analysis.ulog.setpoint_changes``). A leg shorter than ``BRAKING_LEG_MIN``, or
+    whose window runs past either log, is left out.
+    """
+    out: list[tuple[float, float]] = []
+    end = min(t[-1], t_truth[-1]) if len(t) and len(t_truth) else -np.inf
+    for k in range(len(changes) - 1):
+        start, tx, ty = changes[k][:3]
+        accepted = changes[k + 1][0]
+        i = int(np.searchsorted(t, start))
+        if i >= len(t) or accepted + window[1] > end:
+            continue
+        leg = np.array([tx - estimate[i, 0], ty - estimate[i, 1]])
+        length = float(np.hypot(*leg))
+        if length < BRAKING_LEG_MIN:
+            continue
+        along = leg / length
+        right = np.array([-along[1], along[0]])
+        g = np.arange(accepted + window[0], accepted + window[1], 1.0 / rate)
+        err = np.column_stack(
+            [np.interp(g, t, estimate[:, 2 + j]) - np.interp(g, t_truth, truth[:, j]) for j in range(2)]
+        )
+        out.append((float((err @ along).mean()), float((err @ right).mean())))
     return out
 
 

@@ -72,6 +72,19 @@ flies the estimate, so the vehicle truly trails its setpoints by it. ``update`` 
 horizontal velocity for it (none: no lead). Gazebo's GPS plugin (the local planner's system)
 delays its fixes by 120 ms itself, so there ``gps_lead`` is 0.
 
+When the vehicle accelerates, EKF2's horizontal velocity misses part of it and GPS fusion takes
+it back over seconds. 16 PX4 v1.15 SIH flights of the competition's mission1 and mission2 (flown
+here with their ground truth, 2026-11-27), aligned on the braking into each leg's end (about
+-0.85 m/s^2 for 4.5 s): the velocity error along the track grows from -0.05 to -0.21 m/s and
+is gone 2 s after the braking ends, while the position's lead stays a tenth of a second. Across
+the track it is -0.07 to -0.23 m/s with the heading error at +4 degrees: EKF2 rotates what the
+accelerometer measures by its heading, so a heading error turns the braking into a sideways
+velocity the estimate does not see; the controller does not fight it, the vehicle drifts off the
+new leg and FlightTaskAuto goes offtrack. Modelled as a leaky integral (``ACC_COUPLING_TAU``) of
+``ACC_COUPLING`` of the true acceleration plus ``HEADING_COUPLING`` x ``eh`` x the acceleration
+turned 90 degrees, in ``evx``, ``evy`` only (not integrated into the position). Not in the local
+planner's system (``gazebo_system``), whose flights were calibrated without it.
+
 At touchdown the estimate moves on its own. SIH's downward range finder reads 0 on the ground,
 below its minimum, so EKF2 stops fusing it until the land detector says landed (then EKF2 fakes
 an on-ground reading and fuses again). In between, the height follows the barometer/GNSS
@@ -157,6 +170,13 @@ BODY_Y_NOISE = 1.3
 #: 2-8 Hz: 0.50 / 0.21 degrees rms roll before, PX4 0.17 / 0.06). The position integrates the
 #: unsmoothed process, as before.
 VELOCITY_SMOOTH_S = 0.15  # s
+#: EKF2's velocity misses part of what the vehicle truly does when it accelerates, and GPS
+#: fusion takes it back (module docstring): a leaky integral (``ACC_COUPLING_TAU``) of
+#: ``ACC_COUPLING`` of the true horizontal acceleration, plus what the heading error ``eh`` turns
+#: it by (``HEADING_COUPLING`` x eh x the acceleration turned 90 degrees)
+ACC_COUPLING = 0.1
+ACC_COUPLING_TAU = 2.0  # s
+HEADING_COUPLING = 1.0
 #: stationary standard deviation of x for x' = -x / TAU + v, v Gauss-Markov(sigma_v, TAU_V):
 #: sigma_x^2 = sigma_v^2 * TAU_V * TAU^2 / (TAU_V + TAU)
 _GAIN = math.sqrt(TAU_V * TAU * TAU / (TAU_V + TAU))
@@ -188,12 +208,15 @@ class Estimator:
         "_rng_z",
         "_shift_s",
         "_sv",
+        "_ux",
+        "_uy",
         "_vs_gain",
         "_vs_time",
         "_vsx",
         "_vsy",
         "_vx_prev",
         "_vy_prev",
+        "acc_coupled",
         "body_noise",
         "bx",
         "by",
@@ -253,6 +276,10 @@ class Estimator:
         self._ezl = self.ez  # the leaky part of ez; ez adds the shift after touchdown
         self._exl, self._eyl = self.ex, self.ey  # the leaky parts of ex, ey; they add the lead
         self._vx_prev = self._vy_prev = 0.0
+        self._ux = self._uy = 0.0  # the acceleration-coupled part of evx, evy
+        #: the velocity error follows the acceleration (``ACC_COUPLING``); not in the local
+        #: planner's system, whose flights were calibrated without it
+        self.acc_coupled = True
         self.gps_lead = GPS_LEAD_S
         #: the fore-aft and sideways factors of the horizontal errors' noise (SIH's accelerometer);
         #: Gazebo's IMU plugin (the local planner's system) has one noise density for every axis
@@ -320,6 +347,7 @@ class Estimator:
         has one noise density on every axis, one heading offset all flight, the velocity error
         unsmoothed."""
         self.gps_lead = 0.0
+        self.acc_coupled = False
         self.body_noise = (1.0, 1.0)
         self.hold_heading_offset()
         self.smooth_velocity(0.0)
@@ -345,6 +373,14 @@ class Estimator:
         self._cvx = av * self._cvx + bv * sx * (c * wf - s_ * wr)
         self._cvy = av * self._cvy + bv * sy * (s_ * wf + c * wr)
         self._cvz = av * self._cvz + bv * sz * g(0.0, 1.0)
+        # the true acceleration, bounded (an impact is not a GPS lead)
+        ax = max(-LEAD_ACC_MAX, min(LEAD_ACC_MAX, (vx - self._vx_prev) / dt))
+        ay = max(-LEAD_ACC_MAX, min(LEAD_ACC_MAX, (vy - self._vy_prev) / dt))
+        if self.acc_coupled:
+            au = math.exp(-dt / ACC_COUPLING_TAU)
+            k = HEADING_COUPLING * self.eh
+            self._ux = au * self._ux + (ACC_COUPLING * ax - k * ay) * dt
+            self._uy = au * self._uy + (ACC_COUPLING * ay + k * ax) * dt
         self._exl = leak * self._exl + self._cvx * dt
         self._eyl = leak * self._eyl + self._cvy * dt
         lead = self.gps_lead
@@ -367,9 +403,6 @@ class Estimator:
         wf, wr = kf * g(0.0, 1.0), kr * g(0.0, 1.0)
         self.bx = ab * self.bx + bb * (c * wf - s_ * wr)
         self.by = ab * self.by + bb * (s_ * wf + c * wr)
-        # the lead's velocity part: the true acceleration, bounded (an impact is not a GPS lead)
-        ax = max(-LEAD_ACC_MAX, min(LEAD_ACC_MAX, (vx - self._vx_prev) / dt))
-        ay = max(-LEAD_ACC_MAX, min(LEAD_ACC_MAX, (vy - self._vy_prev) / dt))
         vlead = GPS_VEL_LEAD_S if lead else 0.0
         ts = self._vs_time
         if ts > 0.0:
@@ -380,8 +413,8 @@ class Estimator:
             rx, ry = self._vsx, self._vsy
         else:
             rx, ry = self._cvx + self.bx, self._cvy + self.by
-        self.evx = rx + vlead * ax
-        self.evy = ry + vlead * ay
+        self.evx = rx + self._ux + vlead * ax
+        self.evy = ry + self._uy + vlead * ay
         self._vx_prev, self._vy_prev = vx, vy
         self.bz = ab * self.bz + bb * (SIGMA_BIAS_Z / SIGMA_BIAS) * self._rng_z.gauss(0.0, 1.0)
         self.evz = self._cvz + self.bz + self.vz_shift

@@ -85,7 +85,8 @@ def test_a_competition_flight_logs_px4s_estimate_and_gathers_speed_as_px4_does(s
         with_hte.append(v15)
         without.append(_first_leg(shared_data, seed, 0)[1])
     # slower with the estimate in every flight that does not slow down mid-leg (offtrack: seed 2
-    # here, to 2.2 m/s at 15 m with the estimate, 1.6 without); the median, as one in four may
-    cruising = [(w, wo) for w, wo in zip(with_hte, without, strict=True) if min(w, wo) > 3.0]
+    # here, to 3.4 m/s at 15 m with the estimate, 3.1 without; PX4's cruise 3.76-4.09); the
+    # median, as one in four may
+    cruising = [(w, wo) for w, wo in zip(with_hte, without, strict=True) if min(w, wo) > 3.5]
     assert len(cruising) >= 2 and all(w < wo for w, wo in cruising), (with_hte, without)
     assert np.median(with_hte) == pytest.approx(3.95, abs=0.2)

@@ -117,9 +117,10 @@ def test_position_setpoint_flown_within_the_speed_limit():
         top = max(top, math.hypot(s.v.body.vx, s.v.body.vy))
 
     s.stream(15, each=send)
-    # PX4 holds its estimate on the setpoint; where the vehicle truly is differs by EKF2's error
-    # (PX4 v1.15 SIH: 0.16-0.23 m standard deviation per axis against the ground truth)
-    assert (s.v.st.x, s.v.st.y) == (pytest.approx(20.0, abs=0.3), pytest.approx(0.0, abs=0.3))
+    # PX4 holds its estimate on the setpoint, off it by EKF2's velocity bias / MPC_XY_P (here
+    # 0.29 m/s: 0.3 m); where the vehicle truly is differs by EKF2's error (PX4 v1.15 SIH:
+    # 0.16-0.23 m standard deviation per axis against the ground truth)
+    assert (s.v.st.x, s.v.st.y) == (pytest.approx(20.0, abs=0.4), pytest.approx(0.0, abs=0.4))
     assert math.hypot(s.v.body.x - 20.0, s.v.body.y) < 0.7
     assert 3.0 < top <= 4.3
 
