@@ -38,10 +38,11 @@ per axis (standard deviation), correlated over about 3 s (autocorrelation 0.73-0
 0.44-0.62 at 2 s), up to 0.6 m/s, on the ground as much as in flight. In all nine SIH logs the
 logged velocity disagrees with the logged position's own 1 s displacement by a median 0.25 m/s
 (90th percentile 0.41) in cruise, 0.27 (0.56) while accelerating or braking and 0.27 (0.49) in
-a hover: the same in every phase, not tied to the acceleration (nor to the heading error, 1-2
-degrees in flight). The velocity loop drives the *estimated* velocity to its setpoint, so PX4
-holds a position setpoint about ``bias / MPC_XY_P`` off, creeps onto waypoints and drifts off its
-track; with ``NAV_ACC_RAD`` 0.5 m that drift makes FlightTaskAuto go "offtrack" mid-leg.
+a hover: the same in every phase (against the ground truth, though, part of it follows the
+acceleration and the heading error: below). The velocity loop drives the *estimated* velocity
+to its setpoint, so PX4 holds a position setpoint about ``bias / MPC_XY_P`` off, creeps onto
+waypoints and drifts off its track; with ``NAV_ACC_RAD`` 0.5 m that drift makes FlightTaskAuto
+go "offtrack" mid-leg.
 Modelled as a stationary Gauss-Markov process per axis (``SIGMA_BIAS``, ``TAU_BIAS``), added to
 ``evx``, ``evy`` only; with the integrated part above the logged velocity's error is 0.27 / 0.25
 / 0.24 m/s median in cruise / accelerating / hover (``bench/bench_fidelity.py`` measures both).
