@@ -10,6 +10,7 @@ from uavtest.analysis.fidelity import (
     arrival_velocity_errors,
     body_frame_errors,
     boot_time_correlation,
+    braking_velocity_errors,
     compare,
     estimate_errors,
     estimate_lead,
@@ -286,3 +287,23 @@ def test_a_takeoff_that_went_back_down_is_told_from_one_that_climbed_on() -> Non
     wobble = np.interp(t, [0, 6, 7, 12], [0.0, 6.0, 5.3, 9.6])
     assert not takeoff_turned_back(t, wobble, until=12.5)
     assert not takeoff_turned_back(t, wobble, until=-1.0)  # nothing before it
+
+
+def test_braking_velocity_errors_are_taken_along_and_across_each_leg_after_its_acceptance():
+    # a leg east from (0, 0) to (0, 20), accepted at t = 10 s, then a leg back west (accepted at
+    # 25 s); the estimate's velocity 0.2 m/s short of the truth eastwards and 0.1 m/s south of
+    # it during the 3 s after the first acceptance, right on it otherwise
+    t = np.arange(0.0, 30.0, 0.02)
+    truth = np.column_stack([np.zeros_like(t), np.ones_like(t)])
+    estimate = np.column_stack([np.zeros_like(t), t, truth])
+    window = (t >= 10.0) & (t < 13.0)
+    estimate[window, 3] -= 0.2
+    estimate[window, 2] -= 0.1
+    changes = np.array([[0.0, 0.0, 20.0, 0.5], [10.0, 0.0, 0.0, 0.5], [25.0, 0.0, 20.0, 0.5]])
+    (along, across), *rest = braking_velocity_errors(t, estimate, t, truth, changes)
+    assert along == pytest.approx(-0.2, abs=0.01)
+    assert across == pytest.approx(0.1, abs=0.01)  # south is to the right of an eastward leg
+    assert rest == [(pytest.approx(0.0), pytest.approx(0.0))]  # the second leg: no error
+    # a leg whose window runs past the log is left out
+    late = np.array([changes[0], [28.5, 0.0, 0.0, 0.5]])
+    assert braking_velocity_errors(t, estimate, t, truth, late) == []
