@@ -65,7 +65,7 @@ from uavtest.analysis.fidelity import (
     vertical_estimate_errors,
 )
 from uavtest.analysis.ulog import read_ulog, setpoint_changes, trajectory_from_ulog
-from uavtest.analysis.waypoint_passes import WaypointPass, first_passes
+from uavtest.analysis.waypoint_passes import CornerExit, WaypointPass, corner_exits, first_passes
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.mav import MavCmd, MavFrame
@@ -154,6 +154,8 @@ class Flights:
     boot_y: list = dataclasses.field(default_factory=list)
     #: every leg's first pass at its waypoint, every flight's together (``first_passes``)
     passes: list[WaypointPass] = dataclasses.field(default_factory=list)
+    #: every waypoint left for a new leg, every flight's together (``corner_exits``)
+    exits: list[CornerExit] = dataclasses.field(default_factory=list)
     #: per flight with a mission_result: whether its takeoff turned back (``takeoff_turned_back``)
     stalls: list[bool] = dataclasses.field(default_factory=list)
 
@@ -178,7 +180,9 @@ def _measure(ulog: ULog, into: Flights) -> None:
         into.boot_x.append((g, ex))
         into.boot_y.append((g, ey))
     into.arrival_errors += arrival_velocity_errors(*window)
-    into.passes += first_passes(t, lp["x"], lp["y"], setpoint_changes(ulog))
+    changes = setpoint_changes(ulog)
+    into.passes += first_passes(t, lp["x"], lp["y"], changes)
+    into.exits += corner_exits(t, lp["x"], lp["y"], changes)
     if any(d.name == "mission_result" for d in ulog.data_list):
         mr = ulog.get_dataset("mission_result").data
         reached = mr["timestamp"][mr["seq_reached"] >= 0] / 1e6
@@ -208,9 +212,7 @@ def _measure(ulog: ULog, into: Flights) -> None:
         into.lead.append(estimate_lead(t, estimate, gt["timestamp"] / 1e6, truth, flown))
         velocity = np.column_stack([lp["vx"], lp["vy"], lp["heading"]])
         into.body.append(body_frame_errors(t, velocity, gt["timestamp"] / 1e6, truth[:, 2:], flown))
-        into.braking += braking_velocity_errors(
-            t, estimate, gt["timestamp"] / 1e6, truth[:, 2:], setpoint_changes(ulog)
-        )
+        into.braking += braking_velocity_errors(t, estimate, gt["timestamp"] / 1e6, truth[:, 2:], changes)
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
     q = np.column_stack([att[f"q[{i}]"] for i in range(4)])
@@ -234,6 +236,15 @@ def _passes(passes: list[WaypointPass]) -> str:
     wait = f"; accepted after {statistics.median(waits):.1f} s (≤ {max(waits):.1f})" if waits else ""
     spread_ = f"{np.mean(closest):.2f} ({min(closest):.2f}–{max(closest):.2f})"
     return f"{spread_}; {missed}/{len(passes)} missed{wait}"
+
+
+def _exits(exits: list[CornerExit]) -> str:
+    """How many went farther off the new leg than the acceptance radius within 2 s, and the
+    median / longest time to be 5 m down it."""
+    offtrack = sum(e.offtrack for e in exits)
+    down = [e.seconds_down for e in exits if np.isfinite(e.seconds_down)]
+    timing = f"; 5 m down it after {statistics.median(down):.1f} s (≤ {max(down):.1f})" if down else ""
+    return f"{offtrack}/{len(exits)} offtrack{timing}"
 
 
 def px4_flights(names: list[str], extra: Sequence[Path] = ()) -> Flights:
@@ -328,6 +339,15 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "first pass at a waypoint: closest, m; missed the acceptance radius; s to acceptance",
             _passes(px4_all.passes),
             _passes(ours_all.passes),
+            "",
+            "",
+        )
+    if px4_all.exits and ours_all.exits:
+        t.add_row(
+            "leaving a waypoint for a new leg: farther off it than the acceptance radius within "
+            "2 s (FlightTaskAuto offtrack); s to be 5 m down it",
+            _exits(px4_all.exits),
+            _exits(ours_all.exits),
             "",
             "",
         )

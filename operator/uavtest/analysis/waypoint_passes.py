@@ -19,6 +19,13 @@ changes, per leg (a target set at least ``LEG_MIN`` metres from the vehicle):
   moving on: the next waypoint, or a landing item's descent), in seconds; NaN when the log ends
   first;
 - ``acceptance_radius``: the radius the triplet gave for that target.
+
+``corner_exits`` measures what follows, per waypoint a new leg starts from (the next target at
+least ``LEG_MIN`` metres on): how far off that new leg the vehicle gets within ``EXIT_WINDOW``
+seconds of the acceptance (beyond the acceptance radius FlightTaskAuto goes "offtrack" and heads
+back to the track at walking pace first), and how long until it is ``EXIT_DOWN`` metres down the
+new leg. PX4 v1.15 SIH at mission2's far waypoint: 6 of 8 flights more than 0.5 m off, 5.7 s
+(median) to be 5 m down the way back.
 """
 
 from __future__ import annotations
@@ -27,11 +34,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["APPROACH", "LEG_MIN", "RETREAT", "WaypointPass", "first_passes"]
+__all__ = [
+    "APPROACH",
+    "EXIT_DOWN",
+    "EXIT_WINDOW",
+    "LEG_MIN",
+    "RETREAT",
+    "CornerExit",
+    "WaypointPass",
+    "corner_exits",
+    "first_passes",
+]
 
 LEG_MIN = 5.0  # m: a target set this far from the vehicle is a leg to pass, not a hover
 APPROACH = 2.0  # m: the first pass starts this close to the target
 RETREAT = 0.3  # m: and ends this much further out than the closest it came
+EXIT_WINDOW = 2.0  # s after the acceptance: how far off the new leg the vehicle gets
+EXIT_DOWN = 5.0  # m down the new leg: how long until the vehicle is on its way
 
 
 @dataclass(frozen=True, slots=True)
@@ -74,4 +93,41 @@ def first_passes(t: np.ndarray, x: np.ndarray, y: np.ndarray, changes: np.ndarra
         arrived = float(t[i + near[0]])
         accepted = end - arrived if np.isfinite(end) else float("nan")
         out.append(WaypointPass(closest, float(accepted), float(radius)))
+    return out
+
+
+@dataclass(frozen=True, slots=True)
+class CornerExit:
+    """One waypoint left for a new leg (module docstring)."""
+
+    off_leg: float  # m: the farthest off the new leg within EXIT_WINDOW s of the acceptance
+    seconds_down: float  # s from the acceptance to EXIT_DOWN m down the new leg; NaN: never
+    acceptance_radius: float
+
+    @property
+    def offtrack(self) -> bool:
+        """It got farther off the new leg than the acceptance radius (FlightTaskAuto offtrack)."""
+        return self.off_leg > self.acceptance_radius
+
+
+def corner_exits(t: np.ndarray, x: np.ndarray, y: np.ndarray, changes: np.ndarray) -> list[CornerExit]:
+    """Every waypoint a new leg starts from, in time order (module docstring); ``t``, ``x``, ``y``
+    and ``changes`` as for ``first_passes``. A waypoint the vehicle was never near (within
+    ``APPROACH``) at its acceptance, or a next target closer than ``LEG_MIN``, is left out."""
+    out: list[CornerExit] = []
+    for k in range(len(changes) - 1):
+        _, wx, wy, radius = changes[k]
+        accepted, nx, ny, _ = changes[k + 1]
+        leg = np.array([nx - wx, ny - wy])
+        length = float(np.hypot(*leg))
+        i = int(np.searchsorted(t, accepted))
+        if length < LEG_MIN or i >= len(t) or np.hypot(x[i] - wx, y[i] - wy) > APPROACH:
+            continue
+        along = leg / length
+        rel = np.column_stack([x[i:] - wx, y[i:] - wy])
+        soon = t[i:] <= accepted + EXIT_WINDOW
+        off = float(np.abs(rel[soon] @ np.array([-along[1], along[0]])).max())
+        down = np.flatnonzero(rel @ along >= EXIT_DOWN)
+        seconds = float(t[i + down[0]] - accepted) if len(down) else float("nan")
+        out.append(CornerExit(off, seconds, float(radius)))
     return out

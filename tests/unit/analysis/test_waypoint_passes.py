@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from uavtest.analysis.ulog import read_ulog, setpoint_changes, topic
-from uavtest.analysis.waypoint_passes import first_passes
+from uavtest.analysis.waypoint_passes import corner_exits, first_passes
 
 RATE = 50.0
 
@@ -76,3 +76,36 @@ def test_shared_px4_mission2_run1_missed_its_far_waypoint_by_centimetres_and_cre
     assert far1.missed and 0.5 < far1.closest < 0.6
     assert 5.0 < far1.accepted_after < 8.0
     assert not far2.missed and far2.accepted_after < 2.0
+
+
+def test_a_corner_turned_onto_the_new_leg_is_on_track_and_timed():
+    # east to the waypoint (20, 0), accepted there at 10 s, then north along the new leg at 2 m/s
+    t, x, y = _flight(((0.0, 0.0), (20.0, 0.0), 10.0), ((20.0, 0.0), (20.0, 20.0), 10.0))
+    changes = np.array([[0.0, 20.0, 0.0, 0.5], [10.0, 20.0, 20.0, 0.5]])
+    (e,) = corner_exits(t, x, y, changes)
+    assert e.off_leg == pytest.approx(0.0, abs=0.01)
+    assert not e.offtrack
+    assert e.seconds_down == pytest.approx(2.5, abs=0.05)  # 5 m at 2 m/s
+
+
+def test_a_corner_that_slides_off_the_new_leg_is_offtrack_and_late():
+    # accepted at the waypoint, the vehicle slides 0.8 m east (off the northward leg) in 1.5 s,
+    # comes back, and only then goes north
+    t, x, y = _flight(
+        ((0.0, 0.0), (20.0, 0.0), 10.0),
+        ((20.0, 0.0), (20.8, 0.0), 1.5),
+        ((20.8, 0.0), (20.0, 1.0), 2.5),
+        ((20.0, 1.0), (20.0, 20.0), 9.5),
+    )
+    changes = np.array([[0.0, 20.0, 0.0, 0.5], [10.0, 20.0, 20.0, 0.5]])
+    (e,) = corner_exits(t, x, y, changes)
+    assert e.off_leg == pytest.approx(0.8, abs=0.02)
+    assert e.offtrack
+    assert e.seconds_down == pytest.approx(4.0 + 4.0 / 2.0, abs=0.05)  # back on it at 14 s, 1 m down
+
+
+def test_a_next_target_at_the_waypoint_is_no_new_leg():
+    # a landing: the triplet changes type at the same point, the vehicle descends there
+    t, x, y = _flight(((0.0, 0.0), (20.0, 0.0), 10.0), ((20.0, 0.0), (20.0, 0.0), 5.0))
+    changes = np.array([[0.0, 20.0, 0.0, 0.5], [10.0, 20.0, 0.0, 0.5]])
+    assert corner_exits(t, x, y, changes) == []
