@@ -42,6 +42,7 @@ import numpy as np
 
 from uavtest.analysis.similarity import dtw_points
 from uavtest.analysis.trajectory import Trajectory
+from uavtest.analysis.waypoint_passes import LEG_MIN
 from uavtest.errors import BadInput
 
 __all__ = [
@@ -362,7 +363,6 @@ def arrival_velocity_errors(
 
 
 BRAKING_WINDOW = (0.0, 3.0)  # s after a waypoint's acceptance: the end of the braking and after
-BRAKING_LEG_MIN = 5.0  # m: a target set this far from the vehicle is a leg braked into
 
 
 def braking_velocity_errors(
@@ -380,8 +380,8 @@ def braking_velocity_errors(
 
     ``t``, ``estimate``: the logged position and velocity, (N, 4) x, y, vx, vy; ``t_truth``,
     ``truth``: the ground truth's velocity, (M, 2) vx, vy; ``changes``: the setpoint triplet's
-    changes (``analysis.ulog.setpoint_changes``). A leg shorter than ``BRAKING_LEG_MIN``, or
-    whose window runs past either log, is left out.
+    changes (``analysis.ulog.setpoint_changes``). A leg shorter than ``waypoint_passes.LEG_MIN``,
+    or whose window runs past either log, is left out.
     """
     out: list[tuple[float, float]] = []
     end = min(t[-1], t_truth[-1]) if len(t) and len(t_truth) else -np.inf
@@ -393,14 +393,12 @@ def braking_velocity_errors(
             continue
         leg = np.array([tx - estimate[i, 0], ty - estimate[i, 1]])
         length = float(np.hypot(*leg))
-        if length < BRAKING_LEG_MIN:
+        if length < LEG_MIN:
             continue
         along = leg / length
         right = np.array([-along[1], along[0]])
         g = np.arange(accepted + window[0], accepted + window[1], 1.0 / rate)
-        err = np.column_stack(
-            [np.interp(g, t, estimate[:, 2 + j]) - np.interp(g, t_truth, truth[:, j]) for j in range(2)]
-        )
+        err = _errors_on(g, t, estimate[:, 2:], t_truth, truth, 2)
         out.append((float((err @ along).mean()), float((err @ right).mean())))
     return out
 
