@@ -134,6 +134,15 @@ class SimConfig:
         )
 
 
+def _triplet_key(g: Goal) -> tuple[object, ...]:
+    """What position_setpoint_triplet shows of ``g`` (its type, target, track start and next
+    waypoint; a landing's altitude is the one it carries) to the millimetre, NaN as None: equal
+    keys, the same triplet."""
+    z = g.alt_amsl if g.alt_amsl == g.alt_amsl else g.z
+    values = (g.x, g.y, z, *g.prev, *g.next)
+    return (g.kind, *(round(v, 3) if v == v else None for v in values))
+
+
 def cp_runs(params: ParamStore) -> bool:
     """Whether PX4 v1.15 runs Collision Prevention in position mode: CP_DIST > 0 (``is_active``)
     and the position-mode task that has it, FlightTaskManualPosition (MPC_POS_MODE 0)."""
@@ -186,6 +195,7 @@ class Vehicle:
         self.ctrl = Controller(self.limits, yaw_rate_scale=yaw_rate_scale, px4_yaw=not planner)
         self.land = LandDetector(self.params, self.ctrl, land_jitter, self.est)
         self._land_logged = self.land.state()  # what vehicle_land_detected last said in the log
+        self._triplet_logged: tuple[object, ...] = ()  # the goal position_setpoint_triplet last showed
         self.nav = Navigator(self.params, self.proj, self.home_alt, random.Random(f"{seed}:navigator"))
         if planner:  # PX4-Avoidance's local planner flies the auto modes' waypoints (COM_OBS_AVOID 1)
             camera = DepthCamera(self.world, random.Random(f"{seed}:depth"))
@@ -328,6 +338,11 @@ class Vehicle:
             self._tick += 1
             self._next_us = t + STEP_US
             if self._tick % CONTROL_EVERY == 0:
+                # what the tick logs and announces (mission_result, STATUSTEXT, navigator events)
+                # carries the tick's own time, as PX4 stamps each publication, not the time the
+                # caller last advanced to: the flight and its log do not depend on the slices
+                # the clock is granted in
+                self.time_us = t
                 self._control_tick(t)
         if until_us > self.time_us:
             self.time_us = until_us
@@ -912,8 +927,11 @@ class Vehicle:
                         c.yawrate_sp,
                     )
                 )
-            planner = self.sim.planner  # the triplet is the navigator's, whatever avoidance flies
-            self._log_setpoint(t, self.goal if planner is None or not planner.active else planner.goal)
+            self._log_setpoint(t, self._triplet_goal())
+        elif self.recorder.active and _triplet_key(self._triplet_goal()) != self._triplet_logged:
+            # PX4's navigator publishes the triplet the cycle it changes, and the log carries that
+            # publication's time: a waypoint's acceptance is not held back to the next 10 Hz sample
+            self._log_setpoint(t, self._triplet_goal())
         commander = self.commander
         if commander.status_dirty or tick % (CONTROL_EVERY * 50) == 0:  # on change, else 1 Hz
             commander.status_dirty = False
@@ -933,7 +951,13 @@ class Vehicle:
         self.recorder.data(self.land.topic(t, self.body, self.commander.crashed, self.goal.kind))
         self._land_logged = self.land.state()
 
+    def _triplet_goal(self) -> Goal:
+        """The goal position_setpoint_triplet shows: the navigator's, whatever avoidance flies."""
+        planner = self.sim.planner
+        return self.goal if planner is None or not planner.active else planner.goal
+
     def _log_setpoint(self, t: int, g: Goal) -> None:
+        self._triplet_logged = _triplet_key(g)
         kind = _SETPOINT_TYPE.get(g.kind)
         if kind is None or not self.commander.armed:
             return

@@ -304,25 +304,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: rest sideways (ekf2.ACC_COUPLING, HEADING_COUPLING: PX4 SIH's braking into a waypoint against
 #: its ground truth): mission, manual_and_rtl, crash and params_and_commands change; datalink_loss
 #: (a hover) is byte-identical.
+#: 2026-11-27: every ULog hash re-recorded, every message hash unchanged (no flight changed):
+#: what a control tick logs carries the tick's time (mission_result was stamped at the start of
+#: the clock's slice) and position_setpoint_triplet is logged the tick it changes, not at the next
+#: 10 Hz sample
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "93ef59577b1fc4c51869ddb88fc2afca37c77321cc32f9aa2f48ca2ab27f0953",
+        "4cff9162cd89298f14262e6a9080e2ea6dd517b9c915a449ac4c66b1c597e5af",
         "d1bea8f04405e85611af13c791cea33292de3d3c1f3a5da16e065896b49b2852",
     ),
     "manual_and_rtl": (
-        "2100c2e9e33aad8aaa8232dc61bc2e0fa122d85f2667c72391434cdd9b055a53",
+        "a1fe1f10c6c9712a8a9903a02b6b754f4a37476de37e01a5315a91ecb74a974e",
         "7a2ef068a9cfeffa9dc22015daaf1da3f7978cd6a46cbd88ef47c2f950509100",
     ),
     "datalink_loss": (
-        "67b03baf4655418227a2656d8a18a4d5d4c5468aa116a7ee9a53b79b2c416b33",
+        "991a1c809651c5487df75d0d4e428de2ebce0bad08e337016026a1995daa88c2",
         "199475b466ca4a9a346def0151c3f16e49424ac45a0d28355b2c222c927a57c5",
     ),
     "crash": (
-        "9eec1bfdfec0e4dd83133d801e0a598b7f825fd8874b7fc407fca98e9d8db8de",
+        "e7a13282ab3abc0735cb2d5ed058ffe6649b69813bf21b3b89029c142278398c",
         "a63cb461dfc4db2420358da12738d2c559ccdca8eff3f90df47674539c08c78f",
     ),
     "params_and_commands": (
-        "90e59e938ca7ef31ee40da06d811f5700a81eb7ac4cb1638018850de7a39a781",
+        "c44fa43b048664eba41e36b633bd92d54e39dbc0eb3ea621ecc994ca5f6f9334",
         "2c0d6b3d64cf694b37a00c65d64a23ae23db3e7cf4309d623040cd6db4850581",
     ),
 }

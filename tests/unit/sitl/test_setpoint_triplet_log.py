@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from pyulog import ULog
 
-from uavtest.analysis.ulog import read_ulog
+from uavtest.analysis.ulog import read_ulog, setpoint_changes
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.mav import MavCmd, Msg
 from uavtest.sitl.recorder import MemorySink
@@ -63,3 +63,35 @@ def test_land_modes_setpoint_is_at_altitude_zero() -> None:
     v.recorder.stop()
     alt = _land_altitudes(ULog(io.BytesIO(sink.logs[0])))
     assert len(alt) > 10 and np.all(alt == 0.0)
+
+
+def test_an_acceptance_is_logged_the_tick_it_happens(shared_data: Path) -> None:
+    """PX4's navigator publishes the new triplet and mission_result the cycle it accepts a
+    waypoint, both stamped with that cycle's time (the shared mission2 logs: equal timestamps).
+    Analyses align on that moment (``waypoint_passes``, ``braking_velocity_errors``); the log
+    once held it back to the next 10 Hz sample and stamped mission_result at the start of the
+    clock's slice: 0-100 ms apart."""
+    px4 = read_ulog(shared_data / "px4-sih" / "competition-mission2-run1.ulg")
+    config, items = competition(shared_data, 2)
+    sink = MemorySink()
+    fly_mission(config, items, sink=sink)
+    ours = ULog(io.BytesIO(sink.logs[0]))
+    for log in (px4, ours):
+        mr = log.get_dataset("mission_result").data
+        reached = mr["timestamp"][np.flatnonzero(np.diff(mr["seq_reached"].astype(int)) > 0) + 1]
+        changes = setpoint_changes(log)[:, 0] * 1e6
+        assert len(reached) >= 2
+        for t in reached:  # every acceptance moves the triplet on at the same microsecond
+            assert np.min(np.abs(changes - t)) < 1.0
+
+
+def test_the_log_does_not_depend_on_the_clock_slices(shared_data: Path) -> None:
+    """A flight advanced in 20, 60 or 100 ms slices (a lockstep grant, the in-process loop) writes
+    the same log byte for byte: what a tick logs carries the tick's time."""
+    config, items = competition(shared_data, 2)
+    logs = []
+    for sample_us in (20_000, 60_000, 100_000):
+        sink = MemorySink()
+        fly_mission(config, items, sink=sink, sample_us=sample_us)
+        logs.append(sink.logs[0])
+    assert logs[0] == logs[1] == logs[2]
