@@ -66,14 +66,24 @@ def _attitude_response(ulog: ULog) -> AttitudeResponse:
 def test_the_tilt_follows_the_thrust_setpoint_as_late_as_px4_sihs(shared_data: Path):
     """PX4 v1.15 SIH tilts the body 0.09-0.10 s after its thrust setpoint asks, then with a
     0.06 s lag (its attitude and rate loops and SIH's motors); the built-in vehicle's logged
-    setpoint and attitude give the same within 0.03 s (a plain 0.12 s lag fits as 0.00 + 0.12)."""
+    setpoint and attitude give the same within 0.03 s (a plain 0.12 s lag fits as 0.00 + 0.12).
+
+    One flight's fit splits its response between delay and lag as its manoeuvres allow (seeds 0-5:
+    0.10 + 0.06 to 0.13 + 0.02, the sum 0.15-0.16 s every time), so the vehicle is judged on the
+    median of five seeds, as ``bench_fidelity`` reports it."""
     px4 = _attitude_response(read_ulog(shared_data / "px4-sih" / "competition-mission2-run2.ulg"))
-    config, items = competition(shared_data, 2, seed=0)
-    sink = MemorySink()
-    fly_mission(config, items, sink=sink)
-    ours = _attitude_response(ULog(io.BytesIO(sink.logs[0])))
-    assert ours.delay == pytest.approx(px4.delay, abs=0.03), (ours, px4)
-    assert ours.tau == pytest.approx(px4.tau, abs=0.03), (ours, px4)
+    fits = []
+    for seed in range(5):
+        config, items = competition(shared_data, 2, seed=seed)
+        sink = MemorySink()
+        fly_mission(config, items, sink=sink)
+        fits.append(_attitude_response(ULog(io.BytesIO(sink.logs[0]))))
+    delay = float(np.median([f.delay for f in fits]))
+    tau = float(np.median([f.tau for f in fits]))
+    assert delay == pytest.approx(px4.delay, abs=0.03), (fits, px4)
+    assert tau == pytest.approx(px4.tau, abs=0.03), (fits, px4)
+    for f in fits:  # and every flight's whole response as late as PX4's
+        assert f.delay + f.tau == pytest.approx(px4.delay + px4.tau, abs=0.03), (f, px4)
 
 
 def _velocity_setpoint_residuals(ulog: ULog) -> tuple[np.ndarray, np.ndarray]:

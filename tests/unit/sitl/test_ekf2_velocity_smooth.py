@@ -1,19 +1,25 @@
 """EKF2's velocity error is smooth: against the ground truth, PX4 v1.15 SIH's has little above 1 Hz
-(the shared ``square-mission.ulg``), and so has the built-in estimate's. A first-order Gauss-Markov
-error alone has twice as much there, which the controller, flying the estimate, turns into attitude
-jitter PX4 does not have."""
+(the shared ``square-mission.ulg``), and so has the built-in estimate's. Unsmoothed, the controller,
+flying the estimate, turns what it has there into attitude jitter PX4 does not have."""
 
 from __future__ import annotations
 
+import io
 import random
 from pathlib import Path
 
 import numpy as np
 import pytest
+from pyulog import ULog
 from scipy.signal import welch
 
-from uavtest.analysis.ulog import read_ulog
+from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
+from uavtest.sitl import ekf2
 from uavtest.sitl.ekf2 import VELOCITY_SMOOTH_S, Estimator
+from uavtest.sitl.inprocess import fly_mission
+from uavtest.sitl.recorder import MemorySink
+
+from .conftest import competition
 
 RATE = 50.0  # Hz
 
@@ -55,7 +61,40 @@ def test_the_velocity_error_is_as_smooth_as_px4_sihs(shared_data: Path) -> None:
     px4 = _px4_high_share(shared_data)
     assert 0.07 < px4 < 0.12  # PX4: 0.097 / 0.087 of the error's spread lies from 1 to 5 Hz
     assert 0.6 * px4 < _builtin_high_share(VELOCITY_SMOOTH_S) < 1.4 * px4
-    assert _builtin_high_share(0.0) > 1.4 * px4  # the unsmoothed process: 0.15
+
+
+def _roll_jitter(log: ULog) -> float:
+    """The roll's rms from 2 to 8 Hz in the air (degrees)."""
+    window = trajectory_from_ulog(log)
+    att = log.get_dataset("vehicle_attitude").data
+    q = [att[f"q[{i}]"] for i in range(4)]
+    roll = np.degrees(np.arctan2(2 * (q[0] * q[1] + q[2] * q[3]), 1 - 2 * (q[1] ** 2 + q[2] ** 2)))
+    grid = np.arange(window.t[0] + 2.0, window.t[-1] - 2.0, 1 / 25)
+    y = np.interp(grid, att["timestamp"] / 1e6, roll)
+    f, p = welch(y - y.mean(), fs=25.0, nperseg=256)
+    band = (f >= 2.0) & (f < 8.0)
+    return float(np.sqrt(np.trapezoid(p[band], f[band])))
+
+
+def _builtin_roll_jitter(shared_data: Path, smooth_s: float, monkeypatch: pytest.MonkeyPatch) -> float:
+    monkeypatch.setattr(ekf2, "VELOCITY_SMOOTH_S", smooth_s)
+    jitter = []
+    for seed in range(3):
+        config, items = competition(shared_data, 2, seed=seed)
+        sink = MemorySink()
+        fly_mission(config, items, sink=sink)
+        jitter.append(_roll_jitter(ULog(io.BytesIO(sink.logs[0]))))
+    return float(np.median(jitter))
+
+
+def test_the_vehicle_rolls_as_calmly_as_px4_sih(shared_data: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """PX4 v1.15 SIH's roll from 2 to 8 Hz: 0.17-0.20 degrees rms in the shared competition
+    logs; the built-in vehicle's within a third of it, and without the smoothing well above it."""
+    logs = sorted((shared_data / "px4-sih").glob("competition-*.ulg"))
+    px4 = float(np.median([_roll_jitter(read_ulog(p)) for p in logs]))
+    assert 0.15 < px4 < 0.22
+    assert 0.7 * px4 < _builtin_roll_jitter(shared_data, VELOCITY_SMOOTH_S, monkeypatch) < 1.3 * px4
+    assert _builtin_roll_jitter(shared_data, 0.0, monkeypatch) > 1.4 * px4
 
 
 def test_smoothing_keeps_the_velocity_errors_spread() -> None:

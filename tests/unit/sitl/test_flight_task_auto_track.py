@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 import random
 
+import numpy as np
 import pytest
 
 from uavtest.sitl.ekf2 import Estimator
@@ -108,23 +109,28 @@ def test_the_velocity_bias_does_not_move_the_position_estimate() -> None:
 
 def test_the_velocity_error_is_as_large_and_as_slow_as_px4_sihs() -> None:
     """PX4 v1.15 SIH against its own ground truth (square-mission.ulg): 0.19-0.21 m/s per axis,
-    autocorrelation 0.73-0.82 after 1 s and 0.15-0.41 after 3 s."""
-    e = Estimator(random.Random(7))
-    xs = []
-    for _ in range(50 * 1200):
-        e.update(0.02)
-        xs.append(e.evx)
-    n = len(xs)
-    mean = sum(xs) / n
-    var = sum((x - mean) ** 2 for x in xs) / n
+    autocorrelation 0.73-0.82 after 1 s and 0.15-0.41 after 3 s; in 24 flights of the
+    competition missions (2026-11-27) 0.23 m/s, and gone after 5 s (-0.03; a first-order
+    process of 4 s kept 0.29 there). The vehicle turns a quarter every 10 s, as on a square, so
+    that each axis sees the fore-aft and the sideways error; four 20-minute runs pooled."""
+    runs = []
+    for seed in (7, 1, 2, 3):
+        e = Estimator(random.Random(seed))
+        xs = []
+        for i in range(50 * 1200):
+            e.update(0.02, yaw=(i // 500) % 2 * math.pi / 2)
+            xs.append(e.evx)
+        runs.append(np.array(xs) - np.mean(xs))
+    var = float(np.mean([np.mean(x * x) for x in runs]))
 
     def autocorr(lag_s: float) -> float:
         k = int(lag_s * 50)
-        return sum((xs[i] - mean) * (xs[i + k] - mean) for i in range(n - k)) / ((n - k) * var)
+        return float(np.mean([np.mean(x[:-k] * x[k:]) for x in runs])) / var
 
     assert 0.17 < math.sqrt(var) < 0.3
     assert 0.65 < autocorr(1.0) < 0.9
-    assert 0.15 < autocorr(3.0) < 0.6
+    assert 0.15 < autocorr(3.0) < 0.45
+    assert autocorr(5.0) < 0.15
 
 
 def test_l1_point_is_five_metres_down_the_line_from_the_closest_point() -> None:
