@@ -189,12 +189,15 @@ class Body:
         "ax",
         "ay",
         "az",
+        "azt",
         "cax",
         "cay",
         "caz",
+        "czt",
         "delay_i",
         "delay_x",
         "delay_y",
+        "delay_z",
         "kl",
         "kq",
         "motors",
@@ -226,6 +229,11 @@ class Body:
         self.ax = self.ay = self.az = 0.0  # acceleration from thrust (without gravity), NED
         # what the acceleration is moving toward (the delayed command of the last step): its rate
         self.cax = self.cay = self.caz = 0.0
+        #: the vertical acceleration as the attitude sees it, and what it moves toward: the thrust
+        #: setpoint's direction reaches the body through the attitude loops (delay, ``tau_tilt``)
+        #: as its horizontal part does, while the collective reaches the motors within
+        #: SIH_T_TAU; ``tilt`` is that direction
+        self.azt = self.czt = 0.0
         self.yaw = 0.0
         self.yawrate = 0.0
         #: PX4's yaw rate loop and SIH's yaw torque (``mc_rate_control``); None: the Gazebo
@@ -241,6 +249,7 @@ class Body:
         # the horizontal acceleration commands of the last ``delay_steps`` physics steps (a ring)
         self.delay_x = [0.0] * delay_steps
         self.delay_y = [0.0] * delay_steps
+        self.delay_z = [0.0] * delay_steps
         self.delay_i = 0
 
     def step(
@@ -251,16 +260,19 @@ class Body:
             cax = cay = 0.0
             caz = GRAVITY  # free fall
             cyawrate = 0.0
+        czt = caz
         if self.delay_x:  # the attitude loops' delay: act on the command of delay_steps ago
             i = self.delay_i
-            dx, dy = self.delay_x, self.delay_y
+            dx, dy, dz = self.delay_x, self.delay_y, self.delay_z
             dx[i], cax = cax, dx[i]
             dy[i], cay = cay, dy[i]
+            dz[i], czt = caz, dz[i]
             self.delay_i = i + 1 if i + 1 < len(dx) else 0
-        self.cax, self.cay, self.caz = cax, cay, caz
+        self.cax, self.cay, self.caz, self.czt = cax, cay, caz, czt
         k = dt / self.tau_tilt
         self.ax += (cax - self.ax) * k
         self.ay += (cay - self.ay) * k
+        self.azt += (czt - self.azt) * k
         self.az += (caz - self.az) * (dt / TAU_THRUST)
         rx, ry, rz = self.vx - wn, self.vy - we, self.vz - wd
         drag = self.kl + self.kq * math.sqrt(rx * rx + ry * ry)
@@ -321,11 +333,12 @@ class Body:
             self.on_ground = True
 
     def tilt(self) -> tuple[float, float]:
-        """(roll, pitch) radians that produce the current horizontal acceleration at this yaw."""
+        """(roll, pitch) radians of the thrust's direction at this yaw: the horizontal
+        acceleration against the vertical one as the attitude loops have it (``azt``)."""
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         fwd = c * self.ax + s * self.ay
         right = -s * self.ax + c * self.ay
-        lift = GRAVITY - self.az
+        lift = GRAVITY - self.azt
         if lift <= 0.1:
             lift = 0.1
         return math.atan2(right, lift), -math.atan2(fwd, lift)
@@ -342,8 +355,8 @@ class Body:
         right = -s * self.ax + c * self.ay
         dfwd = c * dax + s * day + yr * right
         dright = -s * dax + c * day - yr * fwd
-        lift = GRAVITY - self.az
-        dlift = -(self.caz - self.az) / TAU_THRUST
+        lift = GRAVITY - self.azt
+        dlift = -(self.czt - self.azt) / self.tau_tilt
         if lift <= 0.1:  # tilt's floor: the angles do not move with it
             lift, dlift = 0.1, 0.0
         roll = math.atan2(right, lift)
