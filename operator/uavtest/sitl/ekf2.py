@@ -186,10 +186,12 @@ BODY_Y_NOISE = 1.3
 #: controller, which flies the estimate, does not tilt to jitter PX4's does not have (attitude
 #: 2-8 Hz: 0.50 / 0.21 degrees rms roll before, PX4 0.17 / 0.06). The position integrates the
 #: unsmoothed process, as before. Since the bias is second order (``TAU_BIAS_XY``) it has far less
-#: above 1 Hz itself: 0.08 s keeps the error's 1-5 Hz share at 0.067 of its spread (PX4
-#: ``square-mission.ulg``: 0.094; 0.15 s left 0.050) and the attitude's 2-8 Hz roll at 0.19 degrees
-#: rms (PX4 SIH 0.17-0.20; unsmoothed 0.31)
-VELOCITY_SMOOTH_S = 0.08  # s
+#: above 1 Hz itself, and since stop 31 the attitude follows PX4 SIH's slower loops
+#: (``simulator_sih.ATTITUDE_DELAY``, ``TAU_TILT``): 0.04 s keeps the error's 1-5 Hz share at 0.081
+#: of its spread (PX4 ``square-mission.ulg``: 0.094; 0.15 s left 0.050) and the attitude's 2-8 Hz
+#: roll / pitch at about 0.18 / 0.11 degrees rms (PX4 SIH 0.17-0.20 / 0.07-0.10; unsmoothed
+#: 0.23 / 0.14)
+VELOCITY_SMOOTH_S = 0.04  # s
 #: EKF2's velocity misses part of what the vehicle truly does when it accelerates, and GPS
 #: fusion takes it back (module docstring): a leaky integral (``ACC_COUPLING_TAU``) of
 #: ``ACC_COUPLING`` of the true horizontal acceleration, plus what the heading error ``eh`` turns

@@ -69,8 +69,8 @@ def test_the_tilt_follows_the_thrust_setpoint_as_late_as_px4_sihs(shared_data: P
     setpoint and attitude give the same within 0.03 s (a plain 0.12 s lag fits as 0.00 + 0.12).
 
     One flight's fit splits its response between delay and lag as its manoeuvres allow (seeds 0-5:
-    0.10 + 0.06 to 0.13 + 0.02, the sum 0.15-0.16 s every time), so the vehicle is judged on the
-    median of five seeds, as ``bench_fidelity`` reports it."""
+    0.08 + 0.10 to 0.10 + 0.06, the sum 0.16-0.18 s), so the vehicle is judged on the median of
+    five seeds, as ``bench_fidelity`` reports it."""
     px4 = _attitude_response(read_ulog(shared_data / "px4-sih" / "competition-mission2-run2.ulg"))
     fits = []
     for seed in range(5):

@@ -96,17 +96,18 @@ def _builtin_tilt_jitter(
 
 def test_the_vehicle_tilts_as_calmly_as_px4_sih(shared_data: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """PX4 v1.15 SIH's roll from 2 to 8 Hz: 0.17-0.20 degrees rms in the shared competition
-    logs, its pitch 0.07-0.10; the built-in vehicle's roll within a third of it, and without the
-    smoothing well above it. Its pitch within half again: the attitude is the thrust setpoint's
-    direction through the attitude loops, the vertical part too (before stop 31 the collective's
-    faster response moved it: 0.16 degrees, 0.15 in cruise without any estimator noise)."""
+    logs, its pitch 0.07-0.10; the built-in vehicle's roll within a third of it (0.18), and
+    without the smoothing above it (0.23; 0.31 before stop 31's slower attitude loops). Its pitch
+    within half again (0.11): the attitude is the thrust setpoint's direction through the attitude
+    loops, the vertical part too (before stop 31 the collective's faster response moved it: 0.16
+    degrees, 0.15 in cruise without any estimator noise)."""
     logs = sorted((shared_data / "px4-sih").glob("competition-*.ulg"))
     px4_roll, px4_pitch = np.median([_tilt_jitter(read_ulog(p)) for p in logs], axis=0)
     assert 0.15 < px4_roll < 0.22 and 0.06 < px4_pitch < 0.11
     roll, pitch = _builtin_tilt_jitter(shared_data, VELOCITY_SMOOTH_S, monkeypatch)
     assert 0.7 * px4_roll < roll < 1.3 * px4_roll
     assert pitch < 1.5 * px4_pitch
-    assert _builtin_tilt_jitter(shared_data, 0.0, monkeypatch)[0] > 1.4 * px4_roll
+    assert _builtin_tilt_jitter(shared_data, 0.0, monkeypatch)[0] > 1.15 * px4_roll
 
 
 def test_smoothing_keeps_the_velocity_errors_spread() -> None:
