@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import dataclasses
+import io
 from pathlib import Path
 
 import pytest
+from pyulog import ULog
 
+from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.mission import NavItem, from_spec
+from uavtest.sitl.recorder import MemorySink
 from uavtest.sitl.vehicle import SimConfig
 from uavtest.spec.loaders import load_test
 from uavtest.spec.mission import mission_items
@@ -22,6 +26,14 @@ def competition(
     test = load_test(shared_data / "competition" / "snippets" / "case_studies" / f"mission{n}.yaml")
     config = dataclasses.replace(SimConfig.from_spec(test.spec, seed), avoidance=avoidance)
     return config, from_spec(mission_items(test.spec))
+
+
+def competition_log(shared_data: Path, n: int, seed: int = 0) -> ULog:
+    """The ULog of the competition's mission ``n`` flown in-process with seed ``seed``, no avoidance."""
+    config, items = competition(shared_data, n, seed)
+    sink = MemorySink()
+    fly_mission(config, items, sink=sink)
+    return ULog(io.BytesIO(sink.logs[0]))
 
 
 @pytest.fixture

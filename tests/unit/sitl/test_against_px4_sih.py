@@ -25,7 +25,7 @@ from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.recorder import MemorySink
 
-from .conftest import competition
+from .conftest import competition, competition_log
 
 DTW_PER_STEP_LIMIT = 1.5  # metres: about 3x PX4's own run-to-run spread
 
@@ -72,12 +72,7 @@ def test_the_tilt_follows_the_thrust_setpoint_as_late_as_px4_sihs(shared_data: P
     0.08 + 0.10 to 0.10 + 0.06, the sum 0.16-0.18 s), so the vehicle is judged on the median of
     five seeds, as ``bench_fidelity`` reports it."""
     px4 = _attitude_response(read_ulog(shared_data / "px4-sih" / "competition-mission2-run2.ulg"))
-    fits = []
-    for seed in range(5):
-        config, items = competition(shared_data, 2, seed=seed)
-        sink = MemorySink()
-        fly_mission(config, items, sink=sink)
-        fits.append(_attitude_response(ULog(io.BytesIO(sink.logs[0]))))
+    fits = [_attitude_response(competition_log(shared_data, 2, seed)) for seed in range(5)]
     delay = float(np.median([f.delay for f in fits]))
     tau = float(np.median([f.tau for f in fits]))
     assert delay == pytest.approx(px4.delay, abs=0.03), (fits, px4)

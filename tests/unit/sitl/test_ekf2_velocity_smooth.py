@@ -4,7 +4,6 @@ flying the estimate, turns what it has there into attitude jitter PX4 does not h
 
 from __future__ import annotations
 
-import io
 import random
 from pathlib import Path
 
@@ -16,10 +15,8 @@ from scipy.signal import welch
 from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
 from uavtest.sitl import ekf2
 from uavtest.sitl.ekf2 import VELOCITY_SMOOTH_S, Estimator
-from uavtest.sitl.inprocess import fly_mission
-from uavtest.sitl.recorder import MemorySink
 
-from .conftest import competition
+from .conftest import competition_log
 
 RATE = 50.0  # Hz
 
@@ -84,12 +81,7 @@ def _builtin_tilt_jitter(
     shared_data: Path, smooth_s: float, monkeypatch: pytest.MonkeyPatch
 ) -> tuple[float, float]:
     monkeypatch.setattr(ekf2, "VELOCITY_SMOOTH_S", smooth_s)
-    jitter = []
-    for seed in range(3):
-        config, items = competition(shared_data, 2, seed=seed)
-        sink = MemorySink()
-        fly_mission(config, items, sink=sink)
-        jitter.append(_tilt_jitter(ULog(io.BytesIO(sink.logs[0]))))
+    jitter = [_tilt_jitter(competition_log(shared_data, 2, seed)) for seed in range(3)]
     roll, pitch = np.median(jitter, axis=0)
     return float(roll), float(pitch)
 
