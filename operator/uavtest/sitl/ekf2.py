@@ -48,7 +48,7 @@ Gauss-Markov process low-passed at its own time constant), added to ``evx``, ``e
 PX4 v1.15 SIH flights (2026-11-27) the error against the ground truth has decorrelated 5 s on
 (autocorrelation -0.03); a first-order process with the same 1 s and 2 s correlation keeps a
 slow part that, through ``bias / MPC_XY_P``, drifted the built-in vehicle too far at the start
-of its takeoff (4 in 25 turned back, PX4 2 in 32) and too often past its waypoints. The local
+of its takeoff (4 in 25 turned back, PX4 2 in 32). The local
 planner's system keeps the first-order process (``SIGMA_BIAS``, ``TAU_BIAS``) it was calibrated
 with (``bench/bench_fidelity.py`` measures both).
 
@@ -165,8 +165,9 @@ SIGMA_BIAS = 0.22  # m/s: per axis, first order
 #: PX4 v1.15 SIH flights of the competition missions (2026-11-27), EKF2's velocity error
 #: decorrelates within 5 s (0.81 / 0.51 / 0.27 / -0.03 at 1 / 2 / 3 / 5 s); a first-order
 #: process of 4 s kept 0.16 at 5 s, and with it the slow part that holds the vehicle a steady
-#: ``bias / MPC_XY_P`` off its track: the built-in vehicle's cross-track error 1 m before a
-#: waypoint stayed at 0.25 m (standard deviation) where PX4's is 0.10-0.19
+#: ``bias / MPC_XY_P`` off its setpoint: it drifted 4 takeoffs in 25 back (PX4 2 in 32). (Not
+#: this: the built-in vehicle's tracking error across the track 1 m before a waypoint stays
+#: 0.25-0.4 m, standard deviation, where PX4's falls to 0.10-0.15)
 TAU_BIAS_XY = 1.2  # s
 #: its spread per axis: with it the velocity error against the ground truth in flight is PX4's
 #: (the same flights: 0.229 m/s; the built-in vehicle 0.224)
