@@ -106,25 +106,41 @@ def _live(url: str) -> bool:
         return False
 
 
+def _initializing(e: Exception) -> bool:
+    code = getattr(e, "code", "") or ""
+    return code.startswith("XMinio") and "NotInitialized" in code
+
+
 def _serving(server: MinioServer) -> bool:
-    """True once an authenticated S3 call succeeds.
+    """True once MinIO answers S3 calls as a settled server would.
 
     /minio/health/live answers 200 while MinIO is still initializing its object layer and IAM; calls
-    made then fail with XMinioServerNotInitialized / XMinioIAMNotInitialized. Tests want a server
-    that answers as a settled one would, so readiness is a real ListBuckets with the root credentials.
+    made then fail with XMinioServerNotInitialized / XMinioIAMNotInitialized. Readiness is a real
+    ListBuckets with the root credentials, then one with credentials MinIO does not know: root's
+    are checked without IAM, so the first can succeed while IAM would still answer any other key
+    with XMinioIAMNotInitialized (a test of wrong credentials once met that instead of
+    InvalidAccessKeyId).
     """
+    from minio import Minio
     from minio.error import S3Error
     from urllib3.exceptions import HTTPError
 
     try:
         server.client().list_buckets()
     except S3Error as e:
-        if e.code.startswith("XMinio") and "NotInitialized" in e.code:
+        if _initializing(e):
             return False
         raise MinioError(f"minio at {server.endpoint} refused its root credentials: {e.code}") from e
     except (HTTPError, OSError):  # not listening yet, or the connection dropped
         return False
-    return True
+    stranger = Minio(server.endpoint, access_key="uavtest-nobody", secret_key="not-a-secret-0", secure=False)
+    try:
+        stranger.list_buckets()
+    except S3Error as e:
+        return not _initializing(e)  # InvalidAccessKeyId: IAM has looked the key up
+    except (HTTPError, OSError):
+        return False
+    raise MinioError(f"minio at {server.endpoint} let unknown credentials list its buckets")
 
 
 def start_minio(
