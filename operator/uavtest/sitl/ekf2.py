@@ -310,13 +310,8 @@ class Estimator:
         #: the horizontal bias's order: 2 (``TAU_BIAS_XY``) as PX4 SIH's, 1 (``TAU_BIAS``) in the
         #: local planner's system, whose flights were calibrated with it
         self.bias_order = 2
-        self.bx, self.by = (z * SIGMA_BIAS_XY for z in self._bias_draw)
-        #: the second-order bias's first stage (twice the variance; started in line with its
-        #: output, which needs no draw of its own: a seed's other errors keep their streams)
-        self._bx1, self._by1 = math.sqrt(2.0) * self.bx, math.sqrt(2.0) * self.by
+        self._start_bias(SIGMA_BIAS_XY)
         self.bz = self._rng_z.gauss(0, SIGMA_BIAS_Z)
-        self.evx, self.evy = self._cvx + self.bx, self._cvy + self.by
-        self._vsx, self._vsy = self.evx, self.evy  # the low-passed random part of evx, evy
         self.smooth_velocity(VELOCITY_SMOOTH_S)
         self.evz = self._cvz + self.bz
         self._ezl = self.ez  # the leaky part of ez; ez adds the shift after touchdown
@@ -395,21 +390,30 @@ class Estimator:
         self.gps_lead = 0.0
         self.acc_coupled = False
         self.bias_order = 1
-        self.bx, self.by = (z * SIGMA_BIAS for z in self._bias_draw)
-        self.evx, self.evy = self._cvx + self.bx, self._cvy + self.by
-        self._vsx, self._vsy = self.evx, self.evy
+        self._start_bias(SIGMA_BIAS)
         self.body_noise = (1.0, 1.0)
         self.hold_heading_offset()
         self.smooth_velocity(0.0)
+
+    def _start_bias(self, sigma: float) -> None:
+        """The horizontal bias at its initial draws times ``sigma``, and the velocity error with it.
+        The second-order bias's first stage (twice the variance) starts in line with its output,
+        which needs no draw of its own: a seed's other errors keep their streams."""
+        self.bx, self.by = (z * sigma for z in self._bias_draw)
+        self._bx1, self._by1 = math.sqrt(2.0) * self.bx, math.sqrt(2.0) * self.by
+        self.evx, self.evy = self._cvx + self.bx, self._cvy + self.by
+        self._vsx, self._vsy = self.evx, self.evy  # the low-passed random part of evx, evy
 
     def smooth_velocity(self, seconds: float) -> None:
         """Low-pass the random part of the horizontal velocity error at ``seconds`` (0: not)."""
         self._vs_time = seconds
         # each part's spread kept: a Gauss-Markov process of time constant T, low-passed at
         # ``seconds``, keeps T / (T + seconds) of its variance
-        self._vs_gain = (math.sqrt((TAU_V + seconds) / TAU_V), math.sqrt((TAU_BIAS + seconds) / TAU_BIAS))
         if self.bias_order == 2:
-            self._vs_gain = (self._vs_gain[0], _bias_gain(TAU_BIAS_XY, seconds))
+            kb = _bias_gain(TAU_BIAS_XY, seconds)
+        else:
+            kb = math.sqrt((TAU_BIAS + seconds) / TAU_BIAS)
+        self._vs_gain = (math.sqrt((TAU_V + seconds) / TAU_V), kb)
 
     def update(self, dt: float, vx: float = 0.0, vy: float = 0.0, yaw: float = 0.0) -> None:
         """Advance ``dt`` seconds; ``vx``, ``vy``: the true horizontal velocity (the GPS lead);
