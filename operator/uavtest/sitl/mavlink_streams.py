@@ -14,7 +14,7 @@ from uavtest.px4.modes import NavState, base_mode_flags, custom_mode
 from uavtest.sitl import mav
 from uavtest.sitl.commander.arming import arming_denied
 from uavtest.sitl.mav import MavState, Msg
-from uavtest.sitl.simulator_sih import DRAG_VERTICAL, GRAVITY
+from uavtest.sitl.simulator_sih import GRAVITY
 from uavtest.sitl.uorb import quaternion
 
 if TYPE_CHECKING:
@@ -248,16 +248,12 @@ def highres_imu(v: Vehicle, t: int) -> Msg:
     """streams/HIGHRES_IMU.hpp from the true body: specific force (thrust + drag, minus gravity;
     -g on the ground) and the magnetic field rotated into the body frame, body rates, baro from
     the ISA at the true altitude, constant temperature."""
-    b, w = v.body, v.wind
+    b = v.body
     roll, pitch, yaw = _attitude(v)
     if b.on_ground:
         fn, fe, fd = 0.0, 0.0, -GRAVITY
-    else:
-        rx, ry = b.vx - w.n, b.vy - w.e
-        drag = b.kl + b.kq * math.sqrt(rx * rx + ry * ry)
-        fn = b.ax - drag * rx
-        fe = b.ay - drag * ry
-        fd = b.az - DRAG_VERTICAL * (b.vz - w.d) - GRAVITY
+    else:  # the last physics step's kinematic acceleration, less gravity
+        fn, fe, fd = b.kax, b.kay, b.kaz - GRAVITY
     ax, ay, az = _to_body(roll, pitch, yaw, fn, fe, fd)
     mx, my, mz = _to_body(roll, pitch, yaw, *MAG_NED)
     gx, gy, gz = b.rates()

@@ -201,6 +201,9 @@ class Body:
         "delay_x",
         "delay_y",
         "delay_z",
+        "kax",
+        "kay",
+        "kaz",
         "kl",
         "kq",
         "motors",
@@ -230,6 +233,9 @@ class Body:
         self.x = self.y = self.z = 0.0
         self.vx = self.vy = self.vz = 0.0
         self.ax = self.ay = self.az = 0.0  # acceleration from thrust (without gravity), NED
+        #: the kinematic acceleration of the last step (thrust, drag and gravity; NED): what SIH
+        #: logs as the ground truth's ``ax, ay, az`` (``_v_I_dot``) and EKF2 as the estimate's
+        self.kax = self.kay = self.kaz = 0.0
         # what the acceleration is moving toward (the delayed command of the last step): its rate
         self.cax = self.cay = self.caz = 0.0
         #: the vertical acceleration as the attitude sees it, and what it moves toward: the thrust
@@ -285,9 +291,11 @@ class Body:
         if self.on_ground:
             if fz >= -LIFTOFF_ACC:  # not enough thrust to leave the ground: no motion
                 self.vx = self.vy = self.vz = 0.0
+                self.kax = self.kay = self.kaz = 0.0
                 self.yawrate = self.yaw_int = self.yaw_torque = 0.0
                 return
             self.on_ground = False
+        self.kax, self.kay, self.kaz = fx, fy, fz
         self.vx += fx * dt
         self.vy += fy * dt
         self.vz += fz * dt
