@@ -36,11 +36,13 @@ from .conftest import competition
 
 
 def test_the_heading_error_has_px4_sihs_offset_and_spread() -> None:
-    """24 PX4 v1.15 SIH flights of the competition's missions against their ground truth
-    (2026-11-27, stop 29), timed from the moment the vehicle first moves faster than 1.5 m/s: the
-    heading error is -1.8 degrees in the climb (4.9 between flights), +1.9 at 4 s, +5.3 at 6-12 s
-    (3.5 between flights; correlated with the climb's by -0.5), +2.7 at 24-40 s (3.5), +0.5 at
-    44-56 s."""
+    """Two sets of 24 PX4 v1.15 SIH flights of the competition's missions against their ground
+    truth (2026-11-27, stop 29 / stop 31), timed from the moment the vehicle first moves faster than
+    1.5 m/s: the heading error is -1.8 / -2.9 degrees in the climb (4.9 / 6.5 between flights),
+    +1.9 / +1.3 at 4 s, +5.3 / +5.5 at 6-12 s (3.5 / 4.3 between flights; correlated with the
+    climb's by -0.5 / +0.2), +2.7 / +3.8 at 24-40 s (3.5 / 3.4), +0.5 / +2.1 at 44-56 s. A flight
+    keeps its shift: 6-12 s and 24-40 s in are correlated by 0.69 / 0.72. (Until stop 32 the
+    built-in estimator gave 2.7 between flights at 6-12 s, +1.7 at 24-40 s and 0.60 here.)"""
     climbs, early, late, later, at4 = [], [], [], [], []
     for seed in range(60):
         e = Estimator(random.Random(seed), random.Random(seed + 1000), random.Random(seed + 2000))
@@ -62,12 +64,12 @@ def test_the_heading_error_has_px4_sihs_offset_and_spread() -> None:
     assert 3.0 < statistics.pstdev(climbs) < 6.0
     assert 0.5 < statistics.fmean(at4) < 3.0  # PX4 +1.9: the settling starts about 3 s in
     assert 4.0 < statistics.fmean(early) < 6.5
-    assert 2.5 < statistics.pstdev(early) < 4.5
-    assert 1.5 < statistics.fmean(late) < 4.0
+    assert 3.0 < statistics.pstdev(early) < 4.5
+    assert 2.0 < statistics.fmean(late) < 4.0
     assert 2.5 < statistics.pstdev(late) < 4.5
-    assert -1.0 < statistics.fmean(later) < 2.0
-    assert statistics.correlation(climbs, early) < -0.2
-    assert statistics.correlation(early, late) > 0.4  # PX4 0.69
+    assert -1.0 < statistics.fmean(later) < 2.5
+    assert -0.6 < statistics.correlation(climbs, early) < 0.3
+    assert statistics.correlation(early, late) > 0.68  # PX4 0.69 / 0.72
 
 
 def test_the_local_planners_system_keeps_one_heading_offset() -> None:
