@@ -65,7 +65,14 @@ from uavtest.analysis.fidelity import (
     vertical_estimate_errors,
 )
 from uavtest.analysis.ulog import read_ulog, setpoint_changes, trajectory_from_ulog
-from uavtest.analysis.waypoint_passes import CornerExit, WaypointPass, corner_exits, first_passes
+from uavtest.analysis.waypoint_passes import (
+    CornerExit,
+    MidLegBrakes,
+    WaypointPass,
+    corner_exits,
+    first_passes,
+    midleg_brakes,
+)
 from uavtest.sitl.geo import Projection
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.mav import MavCmd, MavFrame
@@ -156,6 +163,8 @@ class Flights:
     passes: list[WaypointPass] = dataclasses.field(default_factory=list)
     #: every waypoint left for a new leg, every flight's together (``corner_exits``)
     exits: list[CornerExit] = dataclasses.field(default_factory=list)
+    #: per flight: its trajectory's brakes mid-leg (``midleg_brakes``: FlightTaskAuto offtrack)
+    brakes: list[MidLegBrakes] = dataclasses.field(default_factory=list)
     #: per flight with a mission_result: whether its takeoff turned back (``takeoff_turned_back``)
     stalls: list[bool] = dataclasses.field(default_factory=list)
 
@@ -183,6 +192,10 @@ def _measure(ulog: ULog, into: Flights) -> None:
     changes = setpoint_changes(ulog)
     into.passes += first_passes(t, lp["x"], lp["y"], changes)
     into.exits += corner_exits(t, lp["x"], lp["y"], changes)
+    if any(d.name == "trajectory_setpoint" for d in ulog.data_list):
+        ts = ulog.get_dataset("trajectory_setpoint").data
+        cols = [ts[f"{k}[{i}]"] for k in ("position", "velocity") for i in (0, 1)]
+        into.brakes.append(midleg_brakes(ts["timestamp"] / 1e6, *cols, changes))
     if any(d.name == "mission_result" for d in ulog.data_list):
         mr = ulog.get_dataset("mission_result").data
         reached = mr["timestamp"][mr["seq_reached"] >= 0] / 1e6
@@ -236,6 +249,16 @@ def _passes(passes: list[WaypointPass]) -> str:
     wait = f"; accepted after {statistics.median(waits):.1f} s (≤ {max(waits):.1f})" if waits else ""
     spread_ = f"{np.mean(closest):.2f} ({min(closest):.2f}–{max(closest):.2f})"
     return f"{spread_}; {missed}/{len(passes)} missed{wait}"
+
+
+def _brakes(brakes: list[MidLegBrakes]) -> str:
+    """How many legs braked mid-leg, and how far before their end (median, range)."""
+    legs = sum(b.legs for b in brakes)
+    to_go = [d for b in brakes for d in b.to_go]
+    if not to_go:
+        return f"0 in {legs} legs"
+    where = f"{statistics.median(to_go):.0f} m before the end ({min(to_go):.0f}–{max(to_go):.0f})"
+    return f"{len(to_go)} in {legs} legs; {where}"
 
 
 def _exits(exits: list[CornerExit]) -> str:
@@ -348,6 +371,15 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "2 s (FlightTaskAuto offtrack); s to be 5 m down it",
             _exits(px4_all.exits),
             _exits(ours_all.exits),
+            "",
+            "",
+        )
+    if px4_all.brakes and ours_all.brakes:
+        t.add_row(
+            "braking mid-leg (FlightTaskAuto offtrack: the trajectory below 2.5 m/s from 5 s into "
+            "a leg of 40 m or more until 10 m before its end)",
+            _brakes(px4_all.brakes),
+            _brakes(ours_all.brakes),
             "",
             "",
         )

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from uavtest.analysis.ulog import read_ulog, setpoint_changes, topic
-from uavtest.analysis.waypoint_passes import corner_exits, first_passes
+from uavtest.analysis.waypoint_passes import corner_exits, first_passes, midleg_brakes
 
 RATE = 50.0
 
@@ -109,3 +109,57 @@ def test_a_next_target_at_the_waypoint_is_no_new_leg():
     t, x, y = _flight(((0.0, 0.0), (20.0, 0.0), 10.0), ((20.0, 0.0), (20.0, 0.0), 5.0))
     changes = np.array([[0.0, 20.0, 0.0, 0.5], [10.0, 20.0, 0.0, 0.5]])
     assert corner_exits(t, x, y, changes) == []
+
+
+def _trajectory(speeds: list[tuple[float, float]], start: float = 0.0):
+    """A trajectory setpoint flown east from x = 0 at y = 0: (seconds, speed) pieces at RATE Hz."""
+    ts, vs = [], []
+    t0 = start
+    for dur, v in speeds:
+        n = round(dur * RATE)
+        ts.append(t0 + np.arange(n) / RATE)
+        vs.append(np.full(n, v))
+        t0 += dur
+    t, v = np.concatenate(ts), np.concatenate(vs)
+    x = np.concatenate(([0.0], np.cumsum(v[:-1]) / RATE))
+    zero = np.zeros_like(t)
+    return t, x, zero, v, zero
+
+
+#: a 60 m leg east from (0, 0), set at t = 0 (its previous target set at -10 s), ended at 60 s
+LEG = np.array([[-10.0, 0.0, 0.0, 0.5], [0.0, 60.0, 0.0, 0.5], [60.0, 60.0, 30.0, 0.5]])
+
+
+def test_a_trajectory_that_cruises_the_leg_never_brakes_mid_leg():
+    t, x, y, vx, vy = _trajectory([(10.0, 5.0), (10.0, 1.0)])
+    brakes = midleg_brakes(t, x, y, vx, vy, LEG)
+    assert brakes.legs == 1  # the 30 m leg after it is too short to count
+    assert brakes.to_go == ()
+
+
+def test_an_offtrack_stop_in_cruise_is_one_brake_and_where_it_was():
+    # 6 s at 5 m/s (30 m), 1 s near a stop, dithering about the threshold, then on
+    t, x, y, vx, vy = _trajectory([(6.0, 5.0), (0.4, 1.0), (0.1, 3.0), (0.5, 1.0), (10.0, 5.0)])
+    brakes = midleg_brakes(t, x, y, vx, vy, LEG)
+    assert len(brakes.to_go) == 1
+    assert brakes.to_go[0] == pytest.approx(30.0, abs=0.2)
+
+
+def test_the_start_of_a_leg_and_its_braking_into_the_waypoint_do_not_count():
+    # slow for the leg's first 4 s (4 m), then 47.5 m at 5 m/s, and slow for its last 8.5 m
+    t, x, y, vx, vy = _trajectory([(4.0, 1.0), (9.5, 5.0), (4.0, 2.0)])
+    assert midleg_brakes(t, x, y, vx, vy, LEG).to_go == ()
+
+
+def test_px4_brakes_mid_leg_in_the_shared_mission2_logs(shared_data: Path):
+    """The oracle: in all four shared mission2 logs (three of them one noise realization) PX4's
+    trajectory brakes once about 28-29 m before the end of a leg: FlightTaskAuto offtrack, its
+    estimate having strayed past NAV_ACC_RAD from the line; one run brakes once more."""
+    for run in ("run1", "run2", "run3", "sf1"):
+        ulog = read_ulog(shared_data / "px4-sih" / f"competition-mission2-{run}.ulg")
+        ts = topic(ulog, "trajectory_setpoint")
+        assert ts is not None
+        cols = [ts[f"{k}[{i}]"] for k in ("position", "velocity") for i in (0, 1)]
+        brakes = midleg_brakes(ts["timestamp"] / 1e6, *cols, setpoint_changes(ulog))
+        assert brakes.legs == 2
+        assert any(25.0 < d < 32.0 for d in brakes.to_go), (run, brakes)
