@@ -64,7 +64,7 @@ from uavtest.analysis.fidelity import (
     velocity_errors,
     vertical_estimate_errors,
 )
-from uavtest.analysis.ulog import read_ulog, setpoint_changes, trajectory_from_ulog
+from uavtest.analysis.ulog import read_ulog, setpoint_changes, topic, trajectory_from_ulog
 from uavtest.analysis.waypoint_passes import (
     CornerExit,
     MidLegBrakes,
@@ -192,8 +192,8 @@ def _measure(ulog: ULog, into: Flights) -> None:
     changes = setpoint_changes(ulog)
     into.passes += first_passes(t, lp["x"], lp["y"], changes)
     into.exits += corner_exits(t, lp["x"], lp["y"], changes)
-    if any(d.name == "trajectory_setpoint" for d in ulog.data_list):
-        ts = ulog.get_dataset("trajectory_setpoint").data
+    ts = topic(ulog, "trajectory_setpoint")
+    if ts is not None:
         cols = [ts[f"{k}[{i}]"] for k in ("position", "velocity") for i in (0, 1)]
         into.brakes.append(midleg_brakes(ts["timestamp"] / 1e6, *cols, changes))
     if any(d.name == "mission_result" for d in ulog.data_list):
