@@ -14,11 +14,15 @@ README (MIS_TAKEOFF_ALT 5, MPC_XY_CRUISE 8; takeoff to 10 m, 30 m north, 30 m ea
 one PX4 log, so no PX4-vs-PX4 range.
 
     python bench/bench_fidelity.py [--seeds 25] [--plans mission1,mission2,square]
-        [--px4-logs mission2=DIR ...]
+        [--px4-logs mission2=DIR ...] [--test FILE.yaml=DIR ...]
 
 ``--px4-logs PLAN=DIR`` adds every ``*.ulg`` under DIR (e.g. the replica folders of ``uavtest run``
 with ``simulator: px4`` on the same plan) to that plan's PX4 flights: PX4 SIH seeds its sensor
 noise with ``srand(1234)`` on every start, so the shared logs are few noise realizations.
+
+``--test FILE.yaml=DIR`` measures your own plan: the built-in vehicle flies FILE's mission (its
+params, home and wind, avoidance off) and is compared with every ``*.ulg`` under DIR, the same
+file flown with ``simulator: px4`` (``uavtest run FILE.yaml --out DIR`` with ``UAVTEST_PX4_BIN``).
 """
 
 from __future__ import annotations
@@ -103,6 +107,17 @@ def competition(n: int) -> Plan:
     # no avoidance, so neither do these
     return lambda seed: (
         dataclasses.replace(SimConfig.from_spec(test.spec, seed), avoidance=Avoidance.NONE, home=SIH_HOME),
+        items,
+    )
+
+
+def from_test(path: Path) -> Plan:
+    """The mission of a UavTest file as the built-in vehicle flies it, avoidance off (PX4 SIH
+    flies without it)."""
+    test = load_test(path)
+    items = from_spec(mission_items(test.spec))
+    return lambda seed: (
+        dataclasses.replace(SimConfig.from_spec(test.spec, seed), avoidance=Avoidance.NONE),
         items,
     )
 
@@ -277,6 +292,26 @@ def px4_flights(names: list[str], extra: Sequence[Path] = ()) -> Flights:
     return out
 
 
+def _ulogs(option: str, spec: str, folder: str) -> list[Path]:
+    logs = sorted(Path(folder).rglob("*.ulg"))
+    if not logs:
+        raise SystemExit(f"{option} {spec!r}: no *.ulg under {folder}")
+    return logs
+
+
+def _tests(specs: list[str]) -> list[tuple[Path, list[Path]]]:
+    """``FILE=DIR`` arguments: a test file and its PX4 flights (every ``*.ulg`` under DIR)."""
+    out = []
+    for spec in specs:
+        path, sep, folder = spec.rpartition("=")
+        if not sep or not path:
+            raise SystemExit(f"--test {spec!r}: expected FILE.yaml=DIR")
+        if not Path(path).is_file():
+            raise SystemExit(f"--test {spec!r}: no test file {path}")
+        out.append((Path(path), _ulogs("--test", spec, folder)))
+    return out
+
+
 def _extra_logs(specs: list[str]) -> dict[str, list[Path]]:
     """``PLAN=DIR`` arguments: every ``*.ulg`` under each DIR, per plan."""
     out: dict[str, list[Path]] = {}
@@ -284,10 +319,7 @@ def _extra_logs(specs: list[str]) -> dict[str, list[Path]]:
         name, sep, folder = spec.partition("=")
         if not sep or name not in PLANS:
             raise SystemExit(f"--px4-logs {spec!r}: expected PLAN=DIR with PLAN one of {', '.join(PLANS)}")
-        logs = sorted(Path(folder).rglob("*.ulg"))
-        if not logs:
-            raise SystemExit(f"--px4-logs {spec!r}: no *.ulg under {folder}")
-        out.setdefault(name, []).extend(logs)
+        out.setdefault(name, []).extend(_ulogs("--px4-logs", spec, folder))
     return out
 
 
@@ -515,12 +547,28 @@ def _response(fits: list[AttitudeResponse]) -> str:
     return f"{delay:.2f} + {tau:.2f} s"
 
 
+def compare(console: Console, name: str, plan: Plan, shared: Flights, yours: Flights, seeds: int) -> bool:
+    """Fly ``plan`` over ``seeds`` seeds, print it against the PX4 flights, say whether every
+    mean is inside PX4's range (trivially so with fewer than two PX4 flights: no range)."""
+    px4 = shared.joined(yours)
+    ours, wall = builtin_flights(plan, seeds)
+    t, ok = table(name, px4, ours)
+    console.print(t)
+    if yours.figures and len(shared.figures) >= 2:
+        console.print(yardstick_table(name, shared, yours, ours))
+    per = statistics.mean(f.flight_time for f in ours.figures)
+    console.print(f"  {seeds} built-in flights in {wall:.1f} s wall ({per:.0f} s flight each)\n")
+    return ok or len(px4.figures) < 2
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--seeds", type=int, default=25)
-    parser.add_argument("--plans", default="mission1,mission2,square")
+    parser.add_argument(
+        "--plans", default=None, help="default mission1,mission2,square (none with --test alone)"
+    )
     parser.add_argument(
         "--px4-logs",
         action="append",
@@ -528,13 +576,23 @@ def main() -> None:
         metavar="PLAN=DIR",
         help="more PX4 flights of PLAN: every *.ulg under DIR (repeatable)",
     )
+    parser.add_argument(
+        "--test",
+        action="append",
+        default=[],
+        metavar="FILE=DIR",
+        help="your own plan: a UavTest file and its PX4 flights, every *.ulg under DIR (repeatable)",
+    )
     args = parser.parse_args()
     extra = _extra_logs(args.px4_logs)
-    if not PX4_SIH.is_dir():
+    tests = _tests(args.test)
+    plans = args.plans if args.plans is not None else ("" if tests else "mission1,mission2,square")
+    names = [n for n in plans.split(",") if n]
+    if names and not PX4_SIH.is_dir():
         raise SystemExit(f"{PX4_SIH} not found (set UAVTEST_SHARED_DATA to the real data folder)")
     console = Console(width=150)
     all_ok = True
-    for name in args.plans.split(","):
+    for name in names:
         if name not in PLANS:
             raise SystemExit(f"unknown plan {name!r}: allowed {', '.join(PLANS)}")
         plan, logs = PLANS[name]
@@ -542,19 +600,15 @@ def main() -> None:
             plan = competition(int(name[-1]))
         shared = px4_flights(logs)
         yours = px4_flights([], extra.get(name, []))
-        px4 = shared.joined(yours)
-        if not px4.figures:
+        if not shared.figures and not yours.figures:
             raise SystemExit(f"{name}: no PX4 flight of this plan in the shared data: --px4-logs {name}=DIR")
         if name in extra:
             console.print(f"{name}: {len(logs)} shared PX4 logs and {len(extra[name])} from --px4-logs")
-        ours, wall = builtin_flights(plan, args.seeds)
-        t, ok = table(name, px4, ours)
-        all_ok &= ok or len(px4.figures) < 2
-        console.print(t)
-        if name in extra and len(shared.figures) >= 2:
-            console.print(yardstick_table(name, shared, yours, ours))
-        per = statistics.mean(f.flight_time for f in ours.figures)
-        console.print(f"  {args.seeds} built-in flights in {wall:.1f} s wall ({per:.0f} s flight each)\n")
+        all_ok &= compare(console, name, plan, shared, yours, args.seeds)
+    for path, logs in tests:
+        console.print(f"{path.name}: {len(logs)} PX4 logs")
+        yours = px4_flights([], logs)
+        all_ok &= compare(console, path.stem, from_test(path), Flights([], []), yours, args.seeds)
     console.print(
         "every built-in-vs-PX4 mean inside PX4's run-to-run range" if all_ok else "[red]not all inside[/red]"
     )

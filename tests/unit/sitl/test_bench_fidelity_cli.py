@@ -64,3 +64,45 @@ def test_a_px4_logs_argument_names_the_plan_and_a_folder_with_logs(shared_data: 
     run = _bench("--px4-logs", f"mission2={tmp_path}", data=shared_data)
     assert run.returncode != 0
     assert f"no *.ulg under {tmp_path}" in run.stderr
+
+
+def _rows(stdout: str, figure: str) -> list[str]:
+    return [line.split("│")[2:5] for line in stdout.splitlines() if line.startswith(f"│ {figure}")]
+
+
+def test_your_own_test_file_is_flown_and_held_to_your_px4_flights_of_it(shared_data: Path, tmp_path: Path):
+    cases = shared_data / "competition" / "snippets" / "case_studies"
+    test = tmp_path / "my-mission.yaml"
+    test.write_text(
+        "apiVersion: uavtest.io/v1alpha1\nkind: UavTest\nmetadata: {name: my-mission}\nspec:\n"
+        "  vehicle: {avoidance: none, paramsFile: " + str(cases / "mission-params.csv") + "}\n"
+        "  world: {home: {lat: 47.397742, lon: 8.545594, alt: 488}}\n"
+        "  mission: {planFile: " + str(cases / "mission1.plan") + "}\n"
+        "  commands: [{at: 1, action: mode, mode: mission}]\n"
+    )
+    runs = tmp_path / "px4-runs"
+    for r in ("run1", "run2", "run3", "sf1"):
+        replica = runs / f"replica-{r}"
+        replica.mkdir(parents=True)
+        (replica / "flight.ulg").symlink_to(shared_data / "px4-sih" / f"competition-mission1-{r}.ulg")
+    own = _bench("--seeds", "2", "--test", f"{test}={runs}", data=shared_data)
+    assert "my-mission.yaml: 4 PX4 logs" in own.stdout, own.stdout + own.stderr
+    assert "my-mission: built-in (2 seeds) vs PX4 v1.15 SIH (4 runs)" in own.stdout
+    # the same plan, params and home as the bench's own mission1: the same flights, the same figures
+    builtin = _bench("--seeds", "2", "--plans", "mission1", data=shared_data)
+    for figure in ("DTW", "flight time", "altitude error"):
+        assert _rows(own.stdout, figure) == _rows(builtin.stdout, figure) != [], figure
+
+
+def test_a_test_argument_names_a_test_file_and_a_folder_with_logs(shared_data: Path, tmp_path: Path):
+    run = _bench("--test", f"{tmp_path / 'nothere.yaml'}={tmp_path}", data=shared_data)
+    assert run.returncode != 0
+    assert "no test file" in run.stderr
+    test = tmp_path / "t.yaml"
+    test.write_text("x: 1\n")
+    run = _bench("--test", str(test), data=shared_data)
+    assert run.returncode != 0
+    assert "expected FILE.yaml=DIR" in run.stderr
+    run = _bench("--test", f"{test}={tmp_path / 'empty'}", data=shared_data)
+    assert run.returncode != 0
+    assert "no *.ulg under" in run.stderr
