@@ -28,6 +28,7 @@ file flown with ``simulator: px4`` (``uavtest run FILE.yaml --out DIR`` with ``U
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import io
 import os
@@ -77,12 +78,16 @@ from uavtest.analysis.waypoint_passes import (
     first_passes,
     midleg_brakes,
 )
+from uavtest.errors import BadInput
+from uavtest.px4.modes import NavState
+from uavtest.runner.events import MissionItemInt
+from uavtest.runner.progress import ProgressWatch
 from uavtest.sitl.geo import Projection
-from uavtest.sitl.inprocess import fly_mission
+from uavtest.sitl.inprocess import Flight, fly_mission
 from uavtest.sitl.mav import MavCmd, MavFrame
 from uavtest.sitl.mission import NavItem, from_spec
 from uavtest.sitl.recorder import MemorySink
-from uavtest.sitl.vehicle import SimConfig
+from uavtest.sitl.vehicle import SimConfig, Vehicle
 from uavtest.spec.loaders import load_test
 from uavtest.spec.mission import mission_items
 from uavtest.spec.models import Avoidance, Home
@@ -182,6 +187,9 @@ class Flights:
     brakes: list[MidLegBrakes] = dataclasses.field(default_factory=list)
     #: per flight with a mission_result: whether its takeoff turned back (``takeoff_turned_back``)
     stalls: list[bool] = dataclasses.field(default_factory=list)
+    #: per flight: whether it finished its mission (``mission_result``); the others are counted
+    #: here and measured nowhere else (a stalled or blocked flight has no path to compare)
+    completed: list[bool] = dataclasses.field(default_factory=list)
 
     def joined(self, other: Flights) -> Flights:
         """These flights and ``other``'s, every measurement together."""
@@ -191,6 +199,10 @@ class Flights:
 
 
 def _measure(ulog: ULog, into: Flights) -> None:
+    result = topic(ulog, "mission_result")
+    into.completed.append(result is None or bool(result["finished"][-1]))
+    if not into.completed[-1]:
+        return
     traj = trajectory_from_ulog(ulog)
     into.figures.append(flight_figures(traj))
     lp = ulog.get_dataset("vehicle_local_position").data
@@ -237,7 +249,9 @@ def _measure(ulog: ULog, into: Flights) -> None:
                 flown,
             )
         )
-        into.lead.append(estimate_lead(t, estimate, gt["timestamp"] / 1e6, truth, flown))
+        # a flight that never moved (a stalled takeoff) has no lead to measure
+        with contextlib.suppress(BadInput):
+            into.lead.append(estimate_lead(t, estimate, gt["timestamp"] / 1e6, truth, flown))
         velocity = np.column_stack([lp["vx"], lp["vy"], lp["heading"]])
         into.body.append(body_frame_errors(t, velocity, gt["timestamp"] / 1e6, truth[:, 2:], flown))
         into.braking += braking_velocity_errors(t, estimate, gt["timestamp"] / 1e6, truth[:, 2:], changes)
@@ -323,13 +337,32 @@ def _extra_logs(specs: list[str]) -> dict[str, list[Path]]:
     return out
 
 
+def _blocked(config: SimConfig, items: list[NavItem]) -> Callable[[Vehicle, Flight], bool]:
+    """The runner's rule (``uavtest.runner.progress``): a mission flight that makes no progress
+    toward its next waypoint for a minute is over, as ``uavtest run`` ends a PX4 flight."""
+    watch = ProgressWatch(
+        [MissionItemInt(i.seq, int(i.frame), int(i.command), x=i.x, y=i.y, z=i.z) for i in items],
+        config.home,
+    )
+
+    def stop(vehicle: Vehicle, flight: Flight) -> bool:
+        for seq, _ in flight.reached:
+            watch.on_reached(seq)
+        b = vehicle.body
+        mission = vehicle.armed and not vehicle.landed and vehicle.nav_state == NavState.AUTO_MISSION
+        watch.on_position(b.x, b.y, b.z, vehicle.time_us // 1000, mission)
+        return watch.blocked is not None
+
+    return stop
+
+
 def builtin_flights(plan: Plan, seeds: int) -> tuple[Flights, float]:
     out = Flights([], [])
     start = time.perf_counter()
     for seed in range(seeds):
         config, items = plan(seed)
         sink = MemorySink()
-        fly_mission(config, items, sink=sink)
+        fly_mission(config, items, sink=sink, stop=_blocked(config, items))
         _measure(ULog(io.BytesIO(sink.logs[0])), out)
     return out, time.perf_counter() - start
 
@@ -412,6 +445,15 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "a leg of 40 m or more until 10 m before its end)",
             _brakes(px4_all.brakes),
             _brakes(ours_all.brakes),
+            "",
+            "",
+        )
+    if not all(px4_all.completed) or not all(ours_all.completed):
+        t.add_row(
+            "flights that finished the mission (the others, stalled or blocked, measured nowhere "
+            "else in this table)",
+            f"{sum(px4_all.completed)} of {len(px4_all.completed)}",
+            f"{sum(ours_all.completed)} of {len(ours_all.completed)}",
             "",
             "",
         )
@@ -552,6 +594,9 @@ def compare(console: Console, name: str, plan: Plan, shared: Flights, yours: Fli
     mean is inside PX4's range (trivially so with fewer than two PX4 flights: no range)."""
     px4 = shared.joined(yours)
     ours, wall = builtin_flights(plan, seeds)
+    if not px4.figures or not ours.figures:
+        console.print(f"[red]{name}: no flight that finished its mission to compare[/red]")
+        return False
     t, ok = table(name, px4, ours)
     console.print(t)
     if yours.figures and len(shared.figures) >= 2:

@@ -9,7 +9,7 @@ nobody reads, only the broadcast events (STATUSTEXT, MISSION_ITEM_REACHED) ``Fli
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from uavtest.px4.modes import AutoSubMode, MainMode
@@ -57,7 +57,10 @@ def fly_mission(
     sink: LogSink | None = None,
     limit_s: float = 600.0,
     sample_us: int = 100_000,
+    stop: Callable[[Vehicle, Flight], bool] | None = None,
 ) -> Flight:
+    """Arm, start the mission and fly until the vehicle disarms, ``limit_s`` seconds pass or
+    ``stop`` (asked every ``sample_us``) says the flight is over."""
     vehicle = Vehicle(dataclasses.replace(config, links=()), sink)
     vehicle.load_mission(list(items))
     flight = Flight(vehicle=vehicle)
@@ -80,6 +83,8 @@ def fly_mission(
             flight.takeoff_s = vehicle.takeoff_us / 1e6
         if not vehicle.armed:
             flight.disarmed = True
+            break
+        if stop is not None and stop(vehicle, flight):
             break
     if vehicle.takeoff_us:
         flight.takeoff_s = vehicle.takeoff_us / 1e6

@@ -34,8 +34,16 @@ from uavtest.sitl.sticks import expo_deadzone, limit_unit_length
 
 __all__ = ["IDLE", "Controller", "Goal", "GoalKind", "Limits", "wrap_pi"]
 
-TKO_RAMP_START = 0.7  # m/s (down): PX4's takeoff ramp start
+#: m/s (down): where FlightTaskAuto's takeoff trajectory starts its climb-rate ramp (PX4 v1.15 SIH
+#: logs: trajectory_setpoint.vz +0.70 at arming, rising to -MPC_TKO_SPEED at MPC_TKO_SPEED /
+#: MPC_TKO_RAMP_T)
+TKO_RAMP_START = 0.7
 YAWSPEED_FILTER_TAU = 0.2  # s: FlightTaskAuto's _yawspeed_filter
+#: the downward acceleration (net of gravity) at the least thrust in flight: MPC_THR_MIN 0.12 at a
+#: hover thrust of 0.5 gives 0.76 g
+AZ_MIN_THRUST = 0.8 * GRAVITY
+#: the Gazebo system's vertical integrator, a tenth of MPC_Z_VEL_I_ACC: its local planner's flights
+#: were calibrated with it (``Controller.px4_vertical`` False)
 Z_I_SCALE = 0.1
 
 
@@ -311,9 +319,14 @@ def corner_speed(
 class Controller:
     """Turns a Goal and the estimated state into acceleration (NED, net of gravity) and yaw-rate commands."""
 
-    def __init__(self, limits: Limits, yaw_rate_scale: float = 1.0, px4_yaw: bool = True) -> None:
+    def __init__(
+        self, limits: Limits, yaw_rate_scale: float = 1.0, px4_yaw: bool = True, px4_vertical: bool = True
+    ) -> None:
         self.lim = limits
         self.yaw_rate_scale = yaw_rate_scale
+        #: PX4's vertical control (TakeoffHandling's ramp, PositionControl's integrator at
+        #: MPC_Z_VEL_I_ACC) for PX4 SIH; False: the Gazebo system's, calibrated with its planner
+        self.px4_vertical = px4_vertical
         #: PX4's yaw chain (FlightTaskAuto's setpoint slew and feed-forward, mc_att_control's law)
         #: for PX4 SIH; False: the Gazebo system's rate-limited yaw the local planner was calibrated with
         self.px4_yaw = px4_yaw
@@ -535,7 +548,14 @@ class Controller:
         return pdx + self.ix, pdy + self.iy
 
     def _z_loops(
-        self, dt: float, z: float, vz: float, position: bool, feedforward: bool = True, auto: bool = False
+        self,
+        dt: float,
+        z: float,
+        vz: float,
+        position: bool,
+        feedforward: bool = True,
+        auto: bool = False,
+        up: float = math.inf,
     ) -> float:
         """PositionControl vertically: the altitude's P (``position``), the climb rate's PI, and
         the trajectory's acceleration fed forward (not during the takeoff ramp, as
@@ -547,11 +567,34 @@ class Controller:
         vzc = self.vz + (lim.z_p * (self.pz - z) if position else 0.0)
         if auto:
             vzc = max(-lim.z_vel_max_up, min(max(lim.z_vel_max_dn, 1.2 * lim.z_down), vzc))
+        if up < math.inf:
+            # TakeoffHandling's upward limit, PositionControl's constrain: a negative one forces
+            # the setpoint down (the lower bound wins)
+            down = max(lim.z_vel_max_dn, 1.2 * lim.z_down)
+            vzc = -up if vzc < -up else min(vzc, down)
         self.vsz = vzc
         e = vzc - vz
-        # PX4 SIH climbs at ~90 % of the setpoint for seconds: a slow thrust integrator
-        self.iz = max(-4.0, min(4.0, self.iz + Z_I_SCALE * lim.vz_i * e * dt))
-        return lim.vz_p * e + self.iz + (self.az_ref if feedforward else 0.0)
+        if not self.px4_vertical:
+            self.iz = max(-4.0, min(4.0, self.iz + Z_I_SCALE * lim.vz_i * e * dt))
+            return lim.vz_p * e + self.iz + (self.az_ref if feedforward else 0.0)
+        # PositionControl::_velocityControl: the integral within +-g, frozen while the thrust is at
+        # its minimum (none before the takeoff ramp ends: ``up`` finite) and the error points down,
+        # or at its maximum and the error points up
+        az = lim.vz_p * e + self.iz + (self.az_ref if feedforward else 0.0)
+        floor = GRAVITY if up < math.inf else AZ_MIN_THRUST
+        if not ((az >= floor and e >= 0.0) or (az <= -GRAVITY and e <= 0.0)):
+            self.iz = max(-GRAVITY, min(GRAVITY, self.iz + lim.vz_i * e * dt))
+        return az
+
+    def _takeoff_ramp(self, seconds: float) -> float:
+        """``TakeoffHandling::updateRamp``: the upward climb-rate limit ``seconds`` into the ramp,
+        from -g / MPC_Z_VEL_P_ACC (the velocity loop then asks for no thrust) to MPC_Z_VEL_MAX_UP
+        (the speed the flight task allows, FlightTaskAuto's 1.2 MPC_Z_V_AUTO_UP clamped there)
+        over MPC_TKO_RAMP_T. Negative: the setpoint is held that far downward (PositionControl's
+        constrain, the lower bound first)."""
+        lim = self.lim
+        start = -GRAVITY / max(lim.vz_p, 0.01)
+        return start + (lim.z_vel_max_up - start) * min(seconds / max(lim.tko_ramp, 1e-3), 1.0)
 
     def update_hover_thrust(self, previous: float, new: float) -> None:
         """``PositionControl::updateHoverThrust``: the vertical integrator takes up the change, so
@@ -616,6 +659,7 @@ class Controller:
             return 0.0, 0.0, GRAVITY, 0.0
         self._velocity_derivative(dt, vx, vy)
         self.takeoff_via = False
+        az_top = AZ_MIN_THRUST
         if kind is GoalKind.POSITION or kind is GoalKind.TAKEOFF:
             # FlightTaskAuto's track states, for a takeoff triplet too. It has no previous
             # waypoint, so its track starts where the vehicle was when the triplet came, a moment
@@ -682,7 +726,11 @@ class Controller:
                 d = math.hypot(goal.x - x, goal.y - y)
                 if d > lim.acc_rad:
                     target_yaw = math.atan2(goal.y - y, goal.x - x)
-            az = self._z_loops(dt, z, vz, high, feedforward=self.ramp >= lim.tko_ramp, auto=True)
+            up = math.inf
+            if self.px4_vertical and self.ramp < lim.tko_ramp:
+                up = self._takeoff_ramp(self.ramp)
+                az_top = GRAVITY  # the thrust may be zero until the ramp ends (MPC_THR_MIN after)
+            az = self._z_loops(dt, z, vz, high, feedforward=self.ramp >= lim.tko_ramp, auto=True, up=up)
             ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         elif kind is GoalKind.LAND:
             self._xy_reference(dt, goal.x, goal.y, lim.cruise, x, y, acc_rad=lim.acc_rad)
@@ -722,7 +770,7 @@ class Controller:
         else:
             return self._manual(dt, goal, x, y, z, vx, vy, vz, yaw)
         ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
-        az = max(-GRAVITY, min(0.8 * GRAVITY, az))
+        az = max(-GRAVITY, min(az_top, az))
         return ax, ay, az, self._yaw(dt, yaw, target_yaw)
 
     def _offboard(
@@ -751,8 +799,11 @@ class Controller:
         self.of_ramp += dt
         up = lim.z_vel_max_up
         if self.of_ramp < lim.tko_ramp:
-            up = TKO_RAMP_START * -1.0 + (up + TKO_RAMP_START) * self.of_ramp / max(lim.tko_ramp, 1e-3)
-        cz = max(-up, min(lim.z_vel_max_dn, cz))
+            if self.px4_vertical:
+                up = self._takeoff_ramp(self.of_ramp)
+            else:
+                up = -TKO_RAMP_START + (up + TKO_RAMP_START) * self.of_ramp / max(lim.tko_ramp, 1e-3)
+        cz = -up if cz < -up else min(lim.z_vel_max_dn, cz)
         # logged as trajectory_setpoint: the client's position, the limited velocity setpoint
         self.px, self.py, self.pz = px, py, pz
         self.vx, self.vy, self.vz = cx, cy, cz
@@ -776,7 +827,7 @@ class Controller:
             yr = yaw_rate_setpoint(self.yaw_sp, yaw, self.yawrate_sp, lim.att)
         else:
             yr = self._yaw(dt, yaw, goal.yaw)
-        return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
+        return ax, ay, max(-GRAVITY, min(AZ_MIN_THRUST, az)), yr
 
     def _manual(
         self, dt: float, goal: Goal, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float
@@ -824,7 +875,7 @@ class Controller:
             bx, by = rx * full, ry * full
             self.px, self.py, self.vx, self.vy = x, y, vx, vy
             self.vsx = self.vsy = math.nan  # tilt from the sticks: no horizontal velocity control
-            return ch * bx - sh * by, sh * bx + ch * by, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
+            return ch * bx - sh * by, sh * bx + ch * by, max(-GRAVITY, min(AZ_MIN_THRUST, az)), yr
         self.stretch = 1.0
         if self.stick_acceleration and not self.direct_velocity and self._stick_acc is not None:
             # MPC_POS_MODE 4: the stick is an acceleration, turned by the locked heading
@@ -839,7 +890,7 @@ class Controller:
             self.px, self.py = (sa.px, sa.py) if sa.locked else (x, y)
             ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
             ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
-            return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
+            return ax, ay, max(-GRAVITY, min(AZ_MIN_THRUST, az)), yr
         # position mode 0 and 3: the (expo'd) sticks are a body-frame velocity
         ex, ey = limit_unit_length(ex, ey)
         bvx, bvy = ex * lim.vel_manual, ey * lim.vel_manual
@@ -857,7 +908,7 @@ class Controller:
                 self.px, self.py = x + self.vx * 0.2, y + self.vy * 0.2
         ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
-        return ax, ay, max(-GRAVITY, min(0.8 * GRAVITY, az)), yr
+        return ax, ay, max(-GRAVITY, min(AZ_MIN_THRUST, az)), yr
 
     def _stick_yaw(self, dt: float, stick: float, yaw: float) -> float:
         """The yaw rate command of the altitude and position modes from the yaw stick.

@@ -54,7 +54,10 @@ YAW_DAMPING = 0.025 / 0.03  # 1/s
 TAU_YAW_GAZEBO = 0.08  # s
 #: the collective thrust (0..1) that holds SIH's quadrotor up: SIH_MASS * g / (4 * SIH_T_MAX)
 HOVER_THRUST = 1.0 * GRAVITY / (4 * 5.0)
-LIFTOFF_ACC = 3.0  # m/s^2 of net upward thrust needed to leave the ground (PX4 SIH lifts off late)
+#: m/s^2 of net upward thrust the Gazebo system needs to leave the ground (its local planner's
+#: flights were calibrated with it). PX4 SIH's fake ground lets go as soon as the thrust outweighs
+#: gravity (``sih.cpp``: grounded while ``_v_I_dot(2) > 0``): ``Body.liftoff_acc`` 0
+LIFTOFF_ACC_GAZEBO = 3.0
 NEAR_MARGIN = 8.0  # m: boxes within this of the vehicle are checked every physics step
 
 
@@ -206,6 +209,7 @@ class Body:
         "kaz",
         "kl",
         "kq",
+        "liftoff_acc",
         "motors",
         "on_ground",
         "tau_tilt",
@@ -229,6 +233,7 @@ class Body:
         drag: tuple[float, float] = (DRAG_LINEAR, DRAG_QUADRATIC),
         delay_steps: int = 0,
         yaw_rate_gains: YawRateGains | None = None,
+        liftoff_acc: float = 0.0,
     ) -> None:
         self.x = self.y = self.z = 0.0
         self.vx = self.vy = self.vz = 0.0
@@ -251,6 +256,8 @@ class Body:
         self.yaw_int = 0.0  # the rate loop's integral (normalised torque)
         self.yaw_torque = 0.0  # the normalised yaw torque the motors give (SIH_T_TAU behind)
         self.on_ground = True
+        #: net upward acceleration (m/s^2) the thrust must give before the ground lets go
+        self.liftoff_acc = liftoff_acc
         self.motors = False
         self.tau_tilt = tau_tilt
         self.kl = drag[0] * drag_scale
@@ -289,7 +296,7 @@ class Body:
         fy = self.ay - drag * ry
         fz = self.az - DRAG_VERTICAL * rz
         if self.on_ground:
-            if fz >= -LIFTOFF_ACC:  # not enough thrust to leave the ground: no motion
+            if fz >= -self.liftoff_acc:  # not enough thrust to leave the ground: no motion
                 self.vx = self.vy = self.vz = 0.0
                 self.kax = self.kay = self.kaz = 0.0
                 self.yawrate = self.yaw_int = self.yaw_torque = 0.0

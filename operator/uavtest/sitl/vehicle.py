@@ -66,6 +66,7 @@ from uavtest.sitl.simulator_sih import (
     DRAG_VERTICAL,
     GRAVITY,
     HOVER_THRUST,
+    LIFTOFF_ACC_GAZEBO,
     TAU_TILT,
     TAU_TILT_GAZEBO,
     Body,
@@ -180,6 +181,7 @@ class Vehicle:
             drag=DRAG_GAZEBO_IRIS if planner else (DRAG_LINEAR, DRAG_QUADRATIC),
             delay_steps=0 if planner else round(ATTITUDE_DELAY / (STEP_US / 1e6)),
             yaw_rate_gains=None if planner else YawRateGains.of(self.params),
+            liftoff_acc=LIFTOFF_ACC_GAZEBO if planner else 0.0,
         )
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
@@ -197,7 +199,9 @@ class Vehicle:
         if not planner:
             self.sim.hover_thrust = HoverThrustEstimator(self.params)
         self.limits = Limits.of(self.params)
-        self.ctrl = Controller(self.limits, yaw_rate_scale=yaw_rate_scale, px4_yaw=not planner)
+        self.ctrl = Controller(
+            self.limits, yaw_rate_scale=yaw_rate_scale, px4_yaw=not planner, px4_vertical=not planner
+        )
         self.land = LandDetector(self.params, self.ctrl, land_jitter, self.est)
         self._land_logged = self.land.state()  # what vehicle_land_detected last said in the log
         self._triplet_logged: tuple[object, ...] = ()  # the goal position_setpoint_triplet last showed

@@ -324,26 +324,30 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: HEADING_FLIGHT_SPREAD 3.6, HEADING_CLIMB_FLIGHT_CORR -0.45, SIGMA_HEADING 2.0, HEADING_DECAY_TAU
 #: 22): every scenario's heading, so every flight, changes (the local planner's system keeps its
 #: process, GAZEBO_SIGMA_HEADING: its flights hash-equal)
+#: stop 33: PX4's vertical control in PX4 SIH's system: TakeoffHandling's ramp (the upward limit
+#: from -g / MPC_Z_VEL_P_ACC), PositionControl's integrator at MPC_Z_VEL_I_ACC with its anti-windup,
+#: SIH's ground letting go at thrust = weight (``Body.liftoff_acc`` 0): every scenario's takeoff and
+#: altitude hold, so every flight, changes
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "509e73e509ca8ac08232d80049c044d7a47bec5a7c666a703d9161c310917770",
-        "cef1f50663a860c8a3ebfc95a53e4bb6b99a32b346315d9add28d864b89aaf62",
+        "3a9395e90fb2bc235d680ebf7f06d0212372a8a3ff14faa9dedfe49a7e7fda1b",
+        "ec5edbecf9308d6116f9af588972eb02c52c600c3565faf21ba8d07e2e9e585c",
     ),
     "manual_and_rtl": (
-        "b8b4a737bef23b458ab25d0c841728e043baeabc8e7f2d8a40fddb37e5d71cb3",
-        "85947f1be4acb48113eff329e8028913dfa5c874dd34d523a22fe0cc361d9abe",
+        "9df88ba68625dee9b7b78e1d4ce0f6af4a68a2757438fe2e4142bb1d8147042e",
+        "d982a1be6e5c73fdaa689672d8168673bb4fd3554cb61187f10433576e253156",
     ),
     "datalink_loss": (
-        "66582e86275b61468fac6540251692bacd0571aab42648e8ccabf4f0b2c2fd95",
-        "07c6a1a2838b9a53668dbbeddddc6249fec74bc0025cc88cab0d4212985383a6",
+        "d5b663532e6e870cb92ceecac0f15a373bf1ea66ef0551a7985d61475cdbadb6",
+        "4e572e9113fa2897fdd8951a6a294f81702e5adbf8672ac7e0020d3f60869af0",
     ),
     "crash": (
-        "05b8aceb9dacef85950c8f758856bd234c42cb29ffebb235777a1c4dbccfb608",
-        "d80be3445ab52590fe5e52a411c913d182693fc963869444679b5da0983ba7d7",
+        "690256ef667b6cb3c86b4b5e9cc0cd88428b166c13afa57dc46d1c385b5526f0",
+        "ed36db1b78229372f33cfb27645bad24524f37b2c56c75452e44779828324695",
     ),
     "params_and_commands": (
-        "1dba0132f145cb430c4047ab90e4d3a20ed7a9bb34e2a28c82a6ef6a8878112b",
-        "7c257d53474fdfef8b0f57ae2a0858118a98ca28bef3b9d7ba893ad47f309e9b",
+        "887625a7f7b01ddfeaceb86cc212e51c51f6409d18c02b4f726123cddc8c0310",
+        "e746188d6d8bcd6a06e124b80b603661cdb4a1559ebaa4a4f07ed0924eb06920",
     ),
 }
 

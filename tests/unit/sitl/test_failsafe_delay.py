@@ -76,7 +76,7 @@ def test_rc_loss_holds_com_fail_act_t_then_returns():
         (0.0, "Failsafe activated: entering Hold for 5 seconds"),
         (5.0, "Manual control loss: switching to RTL"),
         (5.0, "Failsafe activated"),
-        (5.0, "RTL: start return at 498 m (11 m above destination)"),  # PX4: AMSL, ceilf
+        (5.0, "RTL: start return at 498 m (10 m above destination)"),  # PX4: AMSL, ceilf
     ]
     # HEARTBEAT custom mode: Hold during the delay, then Return
     assert {ns for t, ns in f.heartbeats if t0 < t < t0 + 5.0} == {H}

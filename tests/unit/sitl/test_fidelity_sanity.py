@@ -70,11 +70,12 @@ def test_some_takeoffs_stall_and_recover_as_px4_sihs_do(shared_data: Path) -> No
     """4 of 32 PX4 v1.15 SIH flights of the competition's missions (2 of 8 of mission3, flown here)
     climbed, went back down to the ground and climbed again: FlightTaskAuto's track states on the
     takeoff's centimetre-short track (``test_a_takeoff_drifting_behind_its_tracks_start_goes_back_
-    down_to_it``). The built-in vehicle's takeoffs drift as far (0.2-0.7 m) and some stall too;
+    down_to_it``). The built-in vehicle's takeoffs drift as far (0.2-0.7 m) and some stall too,
+    fewer than PX4's since its takeoff climbs as PX4's does (TakeoffHandling's ramp: 2 of 60 here);
     every stalled one still flies its mission."""
     stalls = 0
-    for seed in range(20):
-        config, items = competition(shared_data, 3, seed=seed)
+    for seed in range(60):
+        config, items = competition(shared_data, 1, seed=seed)
         flight = fly_mission(config, items)
         assert flight.vehicle is not None and not flight.vehicle.crashed
         t, _, _, z = np.array(flight.samples).T
@@ -82,4 +83,4 @@ def test_some_takeoffs_stall_and_recover_as_px4_sihs_do(shared_data: Path) -> No
             stalls += 1
             assert [i for i, _ in flight.reached] == list(range(len(items))), f"seed {seed}: {flight.reached}"
             assert flight.landed_s is not None, f"seed {seed} did not land"
-    assert 1 <= stalls <= 6, stalls
+    assert 1 <= stalls <= 12, stalls
