@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import io
+import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -39,3 +41,16 @@ def competition_log(shared_data: Path, n: int, seed: int = 0) -> ULog:
 @pytest.fixture
 def mission2(shared_data: Path) -> tuple[SimConfig, list[NavItem]]:
     return competition(shared_data, 2)
+
+
+@pytest.fixture(scope="module")
+def bench_square() -> Callable[[int], tuple[SimConfig, list[NavItem]]]:
+    """``bench/bench_fidelity.py``'s square plan (the data README's ``square-mission.ulg``: takeoff
+    to 10 m, 30 m north, 30 m east, land there; MIS_TAKEOFF_ALT 5, MPC_XY_CRUISE 8) per seed."""
+    bench = str(Path(__file__).resolve().parents[3] / "bench")
+    sys.path.insert(0, bench)
+    try:
+        import bench_fidelity
+    finally:
+        sys.path.remove(bench)
+    return bench_fidelity.square

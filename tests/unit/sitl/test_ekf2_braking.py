@@ -15,7 +15,6 @@ import math
 import os
 import random
 import statistics
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -44,18 +43,8 @@ def _braking(ulog: ULog) -> list[tuple[float, float]]:
     )
 
 
-@pytest.fixture(scope="module")
-def square_plan():
-    sys.path.insert(0, str(REPO / "bench"))
-    try:
-        import bench_fidelity
-    finally:
-        sys.path.remove(str(REPO / "bench"))
-    return bench_fidelity.square
-
-
 @pytest.mark.skipif(not SQUARE.exists(), reason=f"shared PX4 SIH log not found: {SQUARE}")
-def test_the_velocity_estimate_falls_short_braking_into_a_waypoint_as_px4s_does(square_plan) -> None:
+def test_the_velocity_estimate_falls_short_braking_into_a_waypoint_as_px4s_does(bench_square) -> None:
     px4 = _braking(read_ulog(SQUARE))
     assert len(px4) == 2
     px4_along = statistics.mean(a for a, _ in px4)
@@ -63,7 +52,7 @@ def test_the_velocity_estimate_falls_short_braking_into_a_waypoint_as_px4s_does(
 
     ours: list[tuple[float, float]] = []
     for seed in range(6):
-        config, items = square_plan(seed)
+        config, items = bench_square(seed)
         sink = MemorySink()
         fly_mission(config, items, sink=sink)
         ours += _braking(ULog(io.BytesIO(sink.logs[0])))

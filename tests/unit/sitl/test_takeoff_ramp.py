@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import io
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -47,24 +46,14 @@ def _takeoff(ulog: ULog) -> tuple[np.ndarray, np.ndarray]:
     return thrust, height
 
 
-@pytest.fixture(scope="module")
-def square_plan():
-    sys.path.insert(0, str(REPO / "bench"))
-    try:
-        import bench_fidelity
-    finally:
-        sys.path.remove(str(REPO / "bench"))
-    return bench_fidelity.square
-
-
 @pytest.mark.skipif(not SQUARE.exists(), reason=f"shared PX4 SIH log not found: {SQUARE}")
-def test_the_takeoff_ramps_its_thrust_up_from_zero_and_climbs_as_px4_sih(square_plan) -> None:
+def test_the_takeoff_ramps_its_thrust_up_from_zero_and_climbs_as_px4_sih(bench_square) -> None:
     px4_thrust, px4_height = _takeoff(read_ulog(SQUARE))
     # the oracle as the shared log has it: 0.10 / 0.22 / 0.34 / 0.38 thrust, 1.2 / 2.3 / 3.6 / 5.1 m
     assert 0.05 < px4_thrust[0] < 0.15 and 0.3 < px4_thrust[-1] < 0.45
     runs = []
     for seed in range(4):
-        config, items = square_plan(seed)
+        config, items = bench_square(seed)
         sink = MemorySink()
         fly_mission(config, items, sink=sink)
         runs.append(_takeoff(ULog(io.BytesIO(sink.logs[0]))))
