@@ -7,6 +7,7 @@ import io
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 from pyulog import ULog
@@ -44,13 +45,19 @@ def mission2(shared_data: Path) -> tuple[SimConfig, list[NavItem]]:
 
 
 @pytest.fixture(scope="module")
-def bench_square() -> Callable[[int], tuple[SimConfig, list[NavItem]]]:
-    """``bench/bench_fidelity.py``'s square plan (the data README's ``square-mission.ulg``: takeoff
-    to 10 m, 30 m north, 30 m east, land there; MIS_TAKEOFF_ALT 5, MPC_XY_CRUISE 8) per seed."""
+def bench_fidelity() -> ModuleType:
+    """``bench/bench_fidelity.py`` as a module."""
     bench = str(Path(__file__).resolve().parents[3] / "bench")
     sys.path.insert(0, bench)
     try:
         import bench_fidelity
     finally:
         sys.path.remove(bench)
+    return bench_fidelity
+
+
+@pytest.fixture(scope="module")
+def bench_square(bench_fidelity: ModuleType) -> Callable[[int], tuple[SimConfig, list[NavItem]]]:
+    """The bench's square plan (the data README's ``square-mission.ulg``: takeoff to 10 m, 30 m
+    north, 30 m east, land there; MIS_TAKEOFF_ALT 5, MPC_XY_CRUISE 8) per seed."""
     return bench_fidelity.square

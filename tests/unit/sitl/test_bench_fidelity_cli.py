@@ -11,6 +11,8 @@ import numpy as np
 
 from uavtest.analysis.fidelity import flight_figures, pairs_between
 from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
+from uavtest.sitl.inprocess import fly_mission
+from uavtest.sitl.recorder import MemorySink
 
 BENCH = Path(__file__).resolve().parents[3] / "bench" / "bench_fidelity.py"
 
@@ -106,3 +108,29 @@ def test_a_test_argument_names_a_test_file_and_a_folder_with_logs(shared_data: P
     run = _bench("--test", f"{test}={tmp_path / 'empty'}", data=shared_data)
     assert run.returncode != 0
     assert "no *.ulg under" in run.stderr
+
+
+def test_a_flight_that_stops_making_progress_ends_as_uavtest_run_ends_it_and_is_counted_not_measured(
+    shared_data: Path, tmp_path: Path, bench_fidelity
+):
+    """With a 0.1 m acceptance radius most takeoffs turn back (PX4 v1.15 SIH: 11 of 14) and some
+    never recover: the runner calls them blocked after a minute without progress, so the bench's
+    built-in flights end there too (not at its 600 s limit), and only finished flights are measured."""
+    experiments = shared_data / "surrealist" / "experiments"
+    test = tmp_path / "auto1.yaml"
+    test.write_text(
+        "apiVersion: uavtest.io/v1alpha1\nkind: UavTest\nmetadata: {name: auto1}\nspec:\n"
+        f"  vehicle: {{avoidance: none, paramsFile: {experiments / 'auto1-params.csv'},\n"
+        "    params: {NAV_RCL_ACT: 3}}\n"  # the file's 0 is PX4 v1.12's: v1.15 allows 1-6
+        "  world: {home: {lat: 47.397742, lon: 8.545594, alt: 488}}\n"
+        f"  mission: {{planFile: {experiments / 'auto1.plan'}}}\n"
+        "  commands: [{at: 1, action: mode, mode: mission}]\n"
+    )
+    plan = bench_fidelity.from_test(test)
+    config, items = plan(1)  # its takeoff turns back and never gets within 0.1 m again
+    sink = MemorySink()
+    flight = fly_mission(config, items, sink=sink, stop=bench_fidelity._blocked(config, items))
+    assert flight.reached == [] and flight.samples[-1][0] < 90.0
+    flights, _ = bench_fidelity.builtin_flights(plan, 2)
+    assert flights.completed == [True, False]
+    assert len(flights.figures) == 1  # seed 0 finished (in ~115 s), seed 1 is only counted
