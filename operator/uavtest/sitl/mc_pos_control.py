@@ -338,7 +338,9 @@ class Controller:
         self.in_manual = False
         self.reset(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         self.ramp = 0.0  # seconds into the takeoff ramp
-        self.of_ramp = 1e9  # seconds into an offboard takeoff (the vehicle restarts it while landed)
+        #: seconds into TakeoffHandling's ramp in offboard and the stick modes (no takeoff item): the
+        #: vehicle restarts it while it idles on the ground
+        self.tko_ramp_s = 1e9
         #: Collision Prevention in position mode (FlightTaskManualPosition): (stick velocity NED,
         #: velocity, yaw) -> allowed velocity setpoint; None when PX4 would not run it
         self.velocity_constraint: (
@@ -660,6 +662,8 @@ class Controller:
         self._velocity_derivative(dt, vx, vy)
         self.takeoff_via = False
         az_top = AZ_MIN_THRUST
+        # TakeoffHandling is one state for every mode: a mode entered in the air does not ramp
+        self.tko_ramp_s += dt
         if kind is GoalKind.POSITION or kind is GoalKind.TAKEOFF:
             # FlightTaskAuto's track states, for a takeoff triplet too. It has no previous
             # waypoint, so its track starts where the vehicle was when the triplet came, a moment
@@ -796,13 +800,12 @@ class Controller:
         v = math.hypot(cx, cy)
         if v > lim.vel_max:
             cx, cy = cx * lim.vel_max / v, cy * lim.vel_max / v
-        self.of_ramp += dt
         up = lim.z_vel_max_up
-        if self.of_ramp < lim.tko_ramp:
+        if self.tko_ramp_s < lim.tko_ramp:
             if self.px4_vertical:
-                up = self._takeoff_ramp(self.of_ramp)
+                up = self._takeoff_ramp(self.tko_ramp_s)
             else:
-                up = -TKO_RAMP_START + (up + TKO_RAMP_START) * self.of_ramp / max(lim.tko_ramp, 1e-3)
+                up = -TKO_RAMP_START + (up + TKO_RAMP_START) * self.tko_ramp_s / max(lim.tko_ramp, 1e-3)
         cz = -up if cz < -up else min(lim.z_vel_max_dn, cz)
         # logged as trajectory_setpoint: the client's position, the limited velocity setpoint
         self.px, self.py, self.pz = px, py, pz
@@ -863,7 +866,11 @@ class Controller:
         position_hold = climb == 0.0
         if not position_hold:
             self.pz = z
-        az = self._z_loops(dt, z, vz, position_hold)
+        up, az_top = math.inf, AZ_MIN_THRUST
+        if self.px4_vertical and goal.kind is not GoalKind.ATTITUDE and self.tko_ramp_s < lim.tko_ramp:
+            # a takeoff from the ground with the stick: TakeoffHandling's ramp as in the auto modes
+            up, az_top = self._takeoff_ramp(self.tko_ramp_s), GRAVITY
+        az = self._z_loops(dt, z, vz, position_hold, up=up)
         if goal.kind is GoalKind.ALTITUDE:
             # StickTiltXY: the raw sticks (no deadzone), no longer than 1, are an acceleration,
             # tan(MPC_MAN_TILT_MAX) g at full stick (0.02-3 g), turned by the locked heading
@@ -875,7 +882,7 @@ class Controller:
             bx, by = rx * full, ry * full
             self.px, self.py, self.vx, self.vy = x, y, vx, vy
             self.vsx = self.vsy = math.nan  # tilt from the sticks: no horizontal velocity control
-            return ch * bx - sh * by, sh * bx + ch * by, max(-GRAVITY, min(AZ_MIN_THRUST, az)), yr
+            return ch * bx - sh * by, sh * bx + ch * by, max(-GRAVITY, min(az_top, az)), yr
         self.stretch = 1.0
         if self.stick_acceleration and not self.direct_velocity and self._stick_acc is not None:
             # MPC_POS_MODE 4: the stick is an acceleration, turned by the locked heading
@@ -890,7 +897,7 @@ class Controller:
             self.px, self.py = (sa.px, sa.py) if sa.locked else (x, y)
             ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
             ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
-            return ax, ay, max(-GRAVITY, min(AZ_MIN_THRUST, az)), yr
+            return ax, ay, max(-GRAVITY, min(az_top, az)), yr
         # position mode 0 and 3: the (expo'd) sticks are a body-frame velocity
         ex, ey = limit_unit_length(ex, ey)
         bvx, bvy = ex * lim.vel_manual, ey * lim.vel_manual
@@ -908,7 +915,7 @@ class Controller:
                 self.px, self.py = x + self.vx * 0.2, y + self.vy * 0.2
         ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         ax, ay = self._limit_tilt(ax, ay, lim.tilt_max)
-        return ax, ay, max(-GRAVITY, min(AZ_MIN_THRUST, az)), yr
+        return ax, ay, max(-GRAVITY, min(az_top, az)), yr
 
     def _stick_yaw(self, dt: float, stick: float, yaw: float) -> float:
         """The yaw rate command of the altitude and position modes from the yaw stick.

@@ -728,12 +728,12 @@ class Vehicle:
             return Goal(GoalKind.IDLE)
         landed = self.land.landed
         if t - c.armed_at_us < self.params["COM_SPOOLUP_TIME"] * 1e6 and landed:
-            self.ctrl.of_ramp = 0.0
+            self.ctrl.tko_ramp_s = 0.0
             return Goal(GoalKind.IDLE)
         ns = c.nav_state
         if ns == NavState.OFFBOARD:
             if landed and not self.offboard.want_takeoff(self.st.z):
-                self.ctrl.of_ramp = 0.0  # PX4's takeoff ramp restarts from the ground
+                self.ctrl.tko_ramp_s = 0.0  # PX4's takeoff ramp restarts from the ground
                 return Goal(GoalKind.IDLE)
             return self.offboard.goal
         if ns in _NOT_NAVIGATOR:
@@ -741,6 +741,7 @@ class Vehicle:
                 return Goal(GoalKind.ALTITUDE, vel=(math.nan, math.nan, self.limits.land_speed))
             kind = _MANUAL_GOAL.get(ns, GoalKind.ATTITUDE)
             if landed and c.sticks[2] <= 0.5 + self.params["MPC_HOLD_DZ"] / 2 and kind != GoalKind.ATTITUDE:
+                self.ctrl.tko_ramp_s = 0.0  # TakeoffHandling: ready for takeoff again
                 return Goal(GoalKind.IDLE)
             return Goal(kind, sticks=c.sticks)
         goal = self.nav.update(self.st, t / 1e6)

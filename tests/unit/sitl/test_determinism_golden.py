@@ -328,6 +328,9 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: from -g / MPC_Z_VEL_P_ACC), PositionControl's integrator at MPC_Z_VEL_I_ACC with its anti-windup,
 #: SIH's ground letting go at thrust = weight (``Body.liftoff_acc`` 0): every scenario's takeoff and
 #: altitude hold, so every flight, changes
+#: Then the same ramp for a takeoff from the ground in the stick modes (altitude, position) and
+#: offboard (``Controller.tko_ramp_s``, restarted while the vehicle idles landed): no scenario takes
+#: off with the sticks, every hash unchanged
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
         "3a9395e90fb2bc235d680ebf7f06d0212372a8a3ff14faa9dedfe49a7e7fda1b",

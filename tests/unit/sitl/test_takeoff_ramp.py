@@ -22,7 +22,10 @@ from pyulog import ULog
 
 from uavtest.analysis.ulog import read_ulog
 from uavtest.sitl.inprocess import fly_mission
+from uavtest.sitl.mav import MavCmd, MavResult
 from uavtest.sitl.recorder import MemorySink
+
+from .test_battery_failures import Flight
 
 REPO = Path(__file__).resolve().parents[3]
 SHARED = Path(os.environ.get("UAVTEST_SHARED_DATA", REPO.parent / "shared" / "data"))
@@ -63,3 +66,32 @@ def test_the_takeoff_ramps_its_thrust_up_from_zero_and_climbs_as_px4_sih(bench_s
     # PX4's own flights of this plan (8 flown here) climb 0.1-0.3 m above the shared one
     assert np.all(np.abs(height - px4_height) < 0.4), (height, px4_height)
     assert np.all(np.diff(height) > 1.0)  # climbing at MPC_TKO_SPEED's pace, not hovering
+
+
+def test_a_stick_takeoff_from_the_ground_ramps_and_a_mode_entered_in_the_air_does_not() -> None:
+    """Position mode, armed on the ground, full throttle stick: TakeoffHandling holds the
+    climb-rate setpoint down (-g / MPC_Z_VEL_P_ACC) and raises it over MPC_TKO_RAMP_T, so the
+    thrust starts from zero and the vehicle leaves the ground after about 2 s (by PX4's own
+    equations: the velocity loop's acceleration turns upward 1.8 s in), not at once."""
+    f = Flight()
+    f.fly(5, until=lambda v: v.ready)
+    f.fly(1, each=f.sticks)
+    assert f.command(MavCmd.DO_SET_MODE, 1, 3, 0) == MavResult.ACCEPTED  # position mode
+    assert f.command(MavCmd.COMPONENT_ARM_DISARM, 1) == MavResult.ACCEPTED
+    f.fly(3, each=f.sticks)  # spooled up, idling on the ground with the stick centred
+    start = f.v.time_us / 1e6
+    up_acc = []  # the acceleration setpoint upward, net of gravity
+    while -f.v.body.z < 0.3 and f.v.time_us / 1e6 - start < 5.0:
+        f.fly(0.1, each=lambda: f.sticks(z=1000))
+        up_acc.append(-f.v.ctrl.acc_sp[2])
+    lift_off = f.v.time_us / 1e6 - start
+    assert 1.8 < lift_off < 3.5, lift_off
+    assert up_acc[0] < -8.0  # the setpoint asks for (nearly) no thrust at first
+    # in the air, a mode change does not ramp again: Takeoff mode up, then position mode holds
+    f.fly(5, each=lambda: f.sticks(z=1000))
+    assert f.command(MavCmd.DO_SET_MODE, 1, 4, 3) == MavResult.ACCEPTED  # Hold (loiter)
+    f.fly(3, each=f.sticks)
+    z = f.v.body.z
+    assert f.command(MavCmd.DO_SET_MODE, 1, 3, 0) == MavResult.ACCEPTED
+    f.fly(3, each=f.sticks)
+    assert abs(f.v.body.z - z) < 0.5
