@@ -567,13 +567,12 @@ class Controller:
         MPC_Z_V_AUTO_UP, clamped there), down to max(MPC_Z_VEL_MAX_DN, 1.2 MPC_Z_V_AUTO_DN)."""
         lim = self.lim
         vzc = self.vz + (lim.z_p * (self.pz - z) if position else 0.0)
-        if auto:
-            vzc = max(-lim.z_vel_max_up, min(max(lim.z_vel_max_dn, 1.2 * lim.z_down), vzc))
-        if up < math.inf:
-            # TakeoffHandling's upward limit, PositionControl's constrain: a negative one forces
-            # the setpoint down (the lower bound wins)
+        if auto or up < math.inf:
+            # the auto modes' limits, or TakeoffHandling's upward one: PositionControl's constrain,
+            # the lower bound first (a negative upward limit forces the setpoint down)
             down = max(lim.z_vel_max_dn, 1.2 * lim.z_down)
-            vzc = -up if vzc < -up else min(vzc, down)
+            top = min(up, lim.z_vel_max_up) if auto else up
+            vzc = -top if vzc < -top else min(vzc, down)
         self.vsz = vzc
         e = vzc - vz
         if not self.px4_vertical:
