@@ -79,6 +79,7 @@ def test_a_stick_takeoff_from_the_ground_ramps_and_a_mode_entered_in_the_air_doe
     assert f.command(MavCmd.DO_SET_MODE, 1, 3, 0) == MavResult.ACCEPTED  # position mode
     assert f.command(MavCmd.COMPONENT_ARM_DISARM, 1) == MavResult.ACCEPTED
     f.fly(3, each=f.sticks)  # spooled up, idling on the ground with the stick centred
+    assert f.v.body.z == 0.0 and f.v.landed  # no thrust to leave the ground without the stick
     start = f.v.time_us / 1e6
     up_acc = []  # the acceleration setpoint upward, net of gravity
     while -f.v.body.z < 0.3 and f.v.time_us / 1e6 - start < 5.0:
