@@ -44,6 +44,7 @@ from rich.console import Console
 from rich.table import Table
 
 from uavtest.analysis.attitude_response import (
+    AFTER_LIFTOFF,
     AttitudeResponse,
     body_z_from_quaternion,
     body_z_from_thrust,
@@ -264,7 +265,7 @@ def _measure(ulog: ULog, into: Flights) -> None:
             body_z_from_thrust(thrust),
             att["timestamp"] / 1e6,
             body_z_from_quaternion(q),
-            (traj.t[0], traj.t[-1]),
+            (traj.t[0] + AFTER_LIFTOFF, traj.t[-1]),
         )
     )
 

@@ -182,6 +182,7 @@ class Vehicle:
             delay_steps=0 if planner else round(ATTITUDE_DELAY / (STEP_US / 1e6)),
             yaw_rate_gains=None if planner else YawRateGains.of(self.params),
             liftoff_acc=LIFTOFF_ACC_GAZEBO if planner else 0.0,
+            windup=not planner,
         )
         self.world = World(config.obstacles)
         self.wind = WindModel(config.wind, random.Random(f"{seed}:wind"))
@@ -570,6 +571,8 @@ class Vehicle:
         cp = self.ctrl.velocity_constraint
         if sim.range_sensor is not None or cp is not None:
             self._range_and_cp_inputs(t, cp)  # type: ignore[arg-type]
+        # PX4's rate controller integrates while the land detector says neither landed nor maybe
+        b.rate_integrating = not (self.land.landed or self.land.maybe_landed)
         if commander.armed and not commander.crashed:
             self.ctrl.dist_bottom = -b.z  # SIH's downward range finder sees the true height
             cax, cay, caz, cyr = self.ctrl.update(

@@ -15,6 +15,7 @@ import pytest
 from pyulog import ULog
 
 from uavtest.analysis.attitude_response import (
+    AFTER_LIFTOFF,
     AttitudeResponse,
     body_z_from_quaternion,
     body_z_from_thrust,
@@ -59,7 +60,7 @@ def _attitude_response(ulog: ULog) -> AttitudeResponse:
         body_z_from_thrust(np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])),
         att["timestamp"] / 1e6,
         body_z_from_quaternion(np.column_stack([att[f"q[{i}]"] for i in range(4)])),
-        (window.t[0], window.t[-1]),
+        (window.t[0] + AFTER_LIFTOFF, window.t[-1]),
     )
 
 
@@ -68,11 +69,12 @@ def test_the_tilt_follows_the_thrust_setpoint_as_late_as_px4_sihs(shared_data: P
     0.06 s lag (its attitude and rate loops and SIH's motors); the built-in vehicle's logged
     setpoint and attitude give the same within 0.03 s (a plain 0.12 s lag fits as 0.00 + 0.12).
 
-    One flight's fit splits its response between delay and lag as its manoeuvres allow (seeds 0-5:
-    0.08 + 0.10 to 0.10 + 0.06, the sum 0.16-0.18 s), so the vehicle is judged on the median of
-    five seeds, as ``bench_fidelity`` reports it."""
+    One flight's fit splits its response between delay and lag as its manoeuvres allow (seeds 0-9:
+    0.04 + 0.14 to 0.10 + 0.06, the sum 0.16-0.18 s; PX4's 24 flights flown here fit 0.08 + 0.08),
+    so the vehicle is judged on the median of ten seeds, as ``bench_fidelity`` reports it, from
+    3 s into the flight (``AFTER_LIFTOFF``: the lift-off's kick is no response to the setpoint)."""
     px4 = _attitude_response(read_ulog(shared_data / "px4-sih" / "competition-mission2-run2.ulg"))
-    fits = [_attitude_response(competition_log(shared_data, 2, seed)) for seed in range(5)]
+    fits = [_attitude_response(competition_log(shared_data, 2, seed)) for seed in range(10)]
     delay = float(np.median([f.delay for f in fits]))
     tau = float(np.median([f.tau for f in fits]))
     assert delay == pytest.approx(px4.delay, abs=0.03), (fits, px4)
