@@ -26,7 +26,15 @@ from scipy.signal import lfilter
 
 from uavtest.errors import BadInput
 
-__all__ = ["AFTER_LIFTOFF", "DELAYS", "TAUS", "AttitudeResponse", "body_z_from_quaternion", "body_z_from_thrust", "fit"]
+__all__ = [
+    "AFTER_LIFTOFF",
+    "DELAYS",
+    "TAUS",
+    "AttitudeResponse",
+    "body_z_from_quaternion",
+    "body_z_from_thrust",
+    "fit",
+]
 
 RATE = 100.0  # Hz: both signals are resampled onto this grid
 DELAYS = tuple(round(0.01 * i, 2) for i in range(26))  # s

@@ -92,7 +92,7 @@ def _tilt_peak_after_release(ulog: ULog) -> float:
     """The largest estimated tilt (degrees) within 4 s of the land detector's first "not landed"
     after arming: the takeoff ramp, the lift-off and the kick."""
     att = ulog.get_dataset("vehicle_attitude").data
-    w, x, y, _ = (att[f"q[{i}]"] for i in range(4))
+    x, y = att["q[1]"], att["q[2]"]
     tilt = np.degrees(np.arccos(np.clip(1.0 - 2.0 * (x * x + y * y), -1.0, 1.0)))
     ld = ulog.get_dataset("vehicle_land_detected").data
     released = ld["timestamp"][np.flatnonzero(ld["landed"] == 0)[0]]
