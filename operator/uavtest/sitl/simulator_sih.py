@@ -430,8 +430,14 @@ class Body:
         yr = self.yawrate
         dax = (self.cax - self.ax) / self.tau_tilt
         day = (self.cay - self.ay) / self.tau_tilt
-        fwd = c * self.ax + s * self.ay
-        right = -s * self.ax + c * self.ay
+        ax, ay = self.ax + self.kx, self.ay + self.ky
+        if self.kick_s >= 0.0:  # the lift-off kick's pulse turns the body too
+            r = self.kick_s / KICK_TAU
+            dh = 2.0 * r * (1.0 - r) / KICK_TAU * math.exp(2.0 * (1.0 - r))
+            dax += self.kick_x * dh
+            day += self.kick_y * dh
+        fwd = c * ax + s * ay
+        right = -s * ax + c * ay
         dfwd = c * dax + s * day + yr * right
         dright = -s * dax + c * day - yr * fwd
         lift = GRAVITY - self.azt

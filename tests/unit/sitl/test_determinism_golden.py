@@ -333,27 +333,29 @@ SCENARIOS: dict[str, Callable[[], tuple[str, str]]] = {
 #: off with the sticks, every hash unchanged
 #: stop 34: PX4 SIH's lift-off kick (``simulator_sih.KICK_GAIN``): the ground holds the body level
 #: and PX4's rate integrators wind up against it while the land detector says neither landed nor
-#: maybe landed; the body is let go with them: every scenario's takeoff, so every flight, changes
+#: maybe landed; the body is let go with them: every scenario's takeoff, so every flight, changes.
+#: Then the body rates (ATTITUDE, vehicle_angular_velocity) with the kick's turn: every log and
+#: telemetry hash changes, the flights (vehicle_local_position) do not
 GOLDEN: dict[str, tuple[str, str]] = {
     "mission": (
-        "82c09be13a2e6b953931cd4901abb65414435fd8db57c4cf79c36f497dad2b4f",
-        "3f669563ddc254762c05c356d3af028f8dbbce66a79ff03f5118ea6f491d7864",
+        "32b9ebb2191a731672e47dab2793e4ff5305f32dac3a1489a6e6491e512a7c84",
+        "2333c02067707c8cf5f66a3944cda306350326001e3e54ffdb35299efb7a80e5",
     ),
     "manual_and_rtl": (
-        "ae78c813c32581214eaf20c64b2520b9f5ec4b3220bfbfacd24302f8989447b0",
-        "e375c173a5c840d97b40f687b1222b6cb6aec3f53fcd8e03f0ac3c74a7546422",
+        "a34664bb6551af2ab02e91b05af748ad1fdb96482929702ecc63212a1ae39d13",
+        "9524fdd33c8aa3c85174e1a7cf232a7ddea7c87379cc5bc0f19b29849c832d81",
     ),
     "datalink_loss": (
-        "ae2d712961915f8d905d4b311c3dcd8820ba51488c14b28f40a48f9df3906ad6",
-        "4aae302e60b33a2a4ac1d882e618137fb68b082aa23fbe9286845f6fe280b8ad",
+        "fcab5c4f4e2ce60d99d9dcd75cc38116a237b6d88a098d8ed7ac21f13387c4b9",
+        "cc97e4837945537b687be1f633fd86099423740142ac8b925db88c39b9369c9e",
     ),
     "crash": (
-        "0480d64174ed55312cf0e5572e074d0566ab045eacb5acf991a3e4c755369b7f",
-        "975b6e5f3f0c73cce06d57fce4a8bffd5ce5942cf9b4737488ee408c124aec8e",
+        "1fe6aee510f534ad4df92316e287b6f0467c9e7dd9c0545f1c8203b3c05ea007",
+        "730ee61158a5604d28367f78fab523f0f6dcce79cf3a31b3d3c35549aa679278",
     ),
     "params_and_commands": (
         "672bdafd175cbc33e53c6a716d50f8fb361a749f0fb703a208edb254f0eb0b53",
-        "10c9947f9ed8f6702b8f98845aa054e091f951fa623ae5181e1c7dad2fced0c5",
+        "672934dfbe1542aaea1c65dcb34360dcde4996313ea912b582af5ed773db92b4",
     ),
 }
 
