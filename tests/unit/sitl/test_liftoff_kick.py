@@ -103,7 +103,8 @@ def _tilt_peak_after_release(ulog: ULog) -> float:
 @pytest.mark.skipif(not SHARED_LOGS, reason=f"shared PX4 SIH logs not found under {SHARED / 'px4-sih'}")
 def test_the_takeoff_kicks_the_attitude_as_in_px4_sih_logs(shared_data: Path) -> None:
     px4 = [_tilt_peak_after_release(ULog(str(p))) for p in SHARED_LOGS]
-    # the oracle: 4.2-15.5 degrees in the eight shared logs (24 flown here: 2.8-19.4, median 11)
+    # the oracle: 4.2-15.5 degrees in the eight shared logs, median 6.9 (24 flown here: 2.8-19.4,
+    # median 10.1)
     assert 4.0 < float(np.median(px4)) < 10.0, px4
     ours = []
     for seed in range(8):
@@ -111,9 +112,9 @@ def test_the_takeoff_kicks_the_attitude_as_in_px4_sih_logs(shared_data: Path) ->
         sink = MemorySink()
         fly_mission(config, items, sink=sink)
         ours.append(_tilt_peak_after_release(ULog(io.BytesIO(sink.logs[0]))))
-    # a body let go level peaks at about 2 degrees, the position loop's own ask
-    assert min(px4) < float(np.median(ours)) < max(px4), (ours, px4)
-    assert float(np.median(ours)) > 5.0, ours
+    # as large as all but the smallest of the shared logs' kicks (5.4 degrees), no larger than
+    # their largest; a body let go level peaks at 4.2 (the tree before: its estimated tilt)
+    assert sorted(px4)[1] < float(np.median(ours)) < max(px4), (ours, px4)
 
 
 def test_the_gyro_sees_the_kick() -> None:
