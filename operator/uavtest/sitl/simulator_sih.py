@@ -59,24 +59,29 @@ HOVER_THRUST = 1.0 * GRAVITY / (4 * 5.0)
 #: gravity (``sih.cpp``: grounded while ``_v_I_dot(2) > 0``): ``Body.liftoff_acc`` 0
 LIFTOFF_ACC_GAZEBO = 3.0
 #: PX4's roll and pitch rate integrators wind up against SIH's ground (``sih.cpp`` holds a grounded
-#: body level, its rates at zero), from when the land detector stops saying (maybe) landed, the
-#: takeoff ramp, until the thrust lifts the body (``RateControl::update`` integrates while not
-#: landed); the body is let go with that torque stored and overshoots. 24 PX4 v1.15 SIH flights of
-#: the competition missions flown here (their ground truth, 2026-11-28): the true tilt peaks
-#: 0.24 s after the release at 10.6 degrees (median; 6.4-16.3, 10th-90th percentile) where the
-#: attitude setpoint asked 3.8, its peak in the direction of the released phase's integral of the
-#: acceleration setpoint's tilt (4.6 degree-seconds median over 1.8 s; peak = 2.5 x that, R^2
-#: 0.73; with the rate integrators' own attitude error, 1.25 x + 1.05 x the setpoint, R^2 0.97)
-#: and gone by 0.6 s; within 3 s of lift-off the vehicle truly moves 0.36 m (median; p90 0.72)
-#: where a body let go level moved 0.14. Modelled as a pulse of acceleration in that direction,
-#: ``KICK_GAIN`` x g x the integral at its peak, shaped (t / KICK_TAU)^2 exp(2 (1 - t / KICK_TAU))
-#: from the release (the position loop's answer, which PX4's busy attitude loop delays, narrows
-#: the body's tilt to 0.1-0.5 s): the tilt then peaks at 8.6 degrees (median, estimated; the
-#: shared logs 6.6, these 24 flights 10.5), the vehicle moves 0.30 m within 3 s and is 0.34 /
-#: 0.40 / 0.46 m off its takeoff point at 4 / 6 / 8 m up (PX4 0.28 / 0.40 / 0.41)
+#: body still, its rates at zero: level as it stands before a takeoff), from when the land detector
+#: stops saying (maybe) landed, the takeoff ramp, until the thrust lifts the body
+#: (``RateControl::update`` integrates while not landed); the body is let go with that torque stored
+#: and overshoots. 24 PX4 v1.15 SIH flights of the competition missions flown here (their ground
+#: truth, 2026-11-28): the true tilt peaks 0.24 s after the release at 10.6 degrees (median;
+#: 6.4-18.8, 10th-90th percentile) where the attitude setpoint asked 3.8, its peak in the direction
+#: of the released phase's integral of the acceleration setpoint's tilt (4.6 degree-seconds median
+#: over 1.8 s; peak = 2.5 x that, R^2 0.73; with the rate integrators' own attitude error, 1.25 x +
+#: 1.05 x the setpoint, R^2 0.97) and gone by 0.6 s; within 3 s of lift-off the vehicle truly moves
+#: 0.36 m (median; p90 0.72) where a body let go level moved 0.14. Modelled as a pulse of
+#: acceleration in that direction, ``KICK_GAIN`` x g x the integral at its peak, shaped (t /
+#: KICK_TAU)^2 exp(2 (1 - t / KICK_TAU)) from the release (the position loop's answer, which PX4's
+#: busy attitude loop delays, narrows the body's tilt to 0.1-0.5 s): the tilt then peaks at 8.6
+#: degrees (median, estimated; the shared logs 6.9, these 24 flights 10.1), the vehicle moves 0.30 m
+#: within 3 s and is 0.34 / 0.40 / 0.46 m off its takeoff point at 4 / 6 / 8 m up (PX4 0.28 / 0.40 /
+#: 0.41)
 KICK_GAIN = 2.5  # 1/s: peak tilt (rad) per rad-second of wound-up tilt command
 KICK_TAU = 0.3  # s
 KICK_END = 2.0  # s after the release
+#: the wound-up tilt command's bound (rad s): PX4's integrator stops at MC_RR_INT_LIM (0.3) of
+#: normalised torque, which grows at MC_ROLLRATE_I (0.2) x MC_ROLL_P (6.5) per rad-second of
+#: attitude error (the defaults; the pitch axis's are the same)
+KICK_WINDUP_MAX = 0.3 / (0.2 * 6.5)
 NEAR_MARGIN = 8.0  # m: boxes within this of the vehicle are checked every physics step
 
 
@@ -296,7 +301,7 @@ class Body:
         self.delay_y = [0.0] * delay_steps
         self.delay_z = [0.0] * delay_steps
         self.delay_i = 0
-        #: PX4 SIH's ground and rate integrators (``KICK_GAIN``): the ground holds the body level,
+        #: PX4 SIH's ground and rate integrators (``KICK_GAIN``): the ground holds the body still,
         #: the integrators wind up while ``rate_integrating`` (the vehicle sets it: the land
         #: detector says neither landed nor maybe landed) and kick the body when it lifts off.
         #: False: the Gazebo system's body, whose tilt follows the command on the ground too
@@ -350,10 +355,14 @@ class Body:
                 self.kax = self.kay = self.kaz = 0.0
                 self.yawrate = self.yaw_int = self.yaw_torque = 0.0
                 if self.windup:
-                    self.ax = self.ay = 0.0  # SIH's ground holds the body level
+                    self.ax = self.ay = 0.0  # SIH's ground holds the body still, here level
                     if self.rate_integrating and self.motors:
-                        self.wx += cax / GRAVITY * dt
-                        self.wy += cay / GRAVITY * dt
+                        wx = self.wx + cax / GRAVITY * dt
+                        wy = self.wy + cay / GRAVITY * dt
+                        w = math.hypot(wx, wy)
+                        if w > KICK_WINDUP_MAX:  # the integrators' limit
+                            wx, wy = wx * KICK_WINDUP_MAX / w, wy * KICK_WINDUP_MAX / w
+                        self.wx, self.wy = wx, wy
                     else:
                         self.wx = self.wy = 0.0
                 return

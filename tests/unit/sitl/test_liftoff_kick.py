@@ -1,12 +1,12 @@
 """The lift-off kick of PX4 v1.15 SIH: rate integrators wound up against the ground.
 
-SIH holds a grounded body level with its rates at zero (``sih.cpp``); PX4's rate controller
-integrates once the land detector stops saying (maybe) landed, the takeoff ramp, so in the 1.8 s
-before the thrust lifts the body its integrators wind up toward the tilt the position loop asks
-for, and the body is let go with that torque stored: its tilt peaks about 0.25 s later at
-6-16 degrees (PX4 flights flown here, their ground truth) and the vehicle truly drifts 0.36 m
-(median) within 3 s. The built-in body was let go level and drifted 0.14 m. The oracle of the
-last test is the shared PX4 SIH logs of the competition's missions (their estimated attitude).
+SIH holds a grounded body still, its rates at zero (``sih.cpp``; level before a takeoff); PX4's rate
+controller integrates once the land detector stops saying (maybe) landed, the takeoff ramp, so in
+the 1.8 s before the thrust lifts the body its integrators wind up toward the tilt the position loop
+asks for, and the body is let go with that torque stored: its tilt peaks about 0.25 s later at 6-16
+degrees (PX4 flights flown here, their ground truth) and the vehicle truly drifts 0.36 m (median)
+within 3 s. The built-in body was let go level and drifted 0.14 m. The oracle of the last test is
+the shared PX4 SIH logs of the competition's missions (their estimated attitude).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from pyulog import ULog
 
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.recorder import MemorySink
-from uavtest.sitl.simulator_sih import GRAVITY, KICK_END, KICK_GAIN, KICK_TAU, Body
+from uavtest.sitl.simulator_sih import GRAVITY, KICK_END, KICK_GAIN, KICK_TAU, KICK_WINDUP_MAX, Body
 
 from .conftest import competition
 
@@ -41,7 +41,7 @@ def _ground_then_release(body: Body, cax: float, integrating: bool) -> tuple[lis
     for _ in range(250):
         body.step(DT, cax, 0.0, GRAVITY, 0.0, 0.0, 0.0, 0.0)
         assert body.on_ground
-        if body.windup:  # SIH's ground holds the body level whatever the command
+        if body.windup:  # SIH's ground holds the body still (level) whatever the command
             assert body.tilt() == (0.0, 0.0)
     kick, pitch = [], []
     wound = 0.0
@@ -135,3 +135,15 @@ def test_the_gyro_sees_the_kick() -> None:
         worst = max(worst, abs((pitch - previous) / DT - body.rates()[1]))
         previous = pitch
     assert worst < 0.15  # rad/s, against a pitch rate of up to 0.87 rad/s (0.7 without the kick)
+
+
+def test_the_wind_up_stops_at_the_integrators_limit() -> None:
+    """Held on the ground long with a tilt asked (a takeoff that cannot lift), PX4's integrators
+    stop at MC_RR_INT_LIM: the kick is bounded, not grown with the wait."""
+    body = Body(windup=True)
+    body.motors = True
+    body.rate_integrating = True
+    for _ in range(int(30.0 / DT)):  # 30 s asking for 3 degrees north
+        body.step(DT, 0.5, 0.0, GRAVITY, 0.0, 0.0, 0.0, 0.0)
+    assert math.hypot(body.wx, body.wy) == pytest.approx(KICK_WINDUP_MAX)
+    assert body.wx > 0.0 and body.wy == 0.0  # still north
