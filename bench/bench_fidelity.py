@@ -53,6 +53,7 @@ from uavtest.analysis.attitude_response import fit as fit_attitude_response
 from uavtest.analysis.fidelity import (
     FIGURES,
     FlightFigures,
+    altitude_drift,
     arrival_velocity_errors,
     body_frame_errors,
     boot_time_correlation,
@@ -171,6 +172,8 @@ class Flights:
     truth: list[tuple[float, float]] = dataclasses.field(default_factory=list)
     #: per such flight: EKF2's altitude (its slow drift left out) and climb-rate error std, flying
     vertical_truth: list[tuple[float, float]] = dataclasses.field(default_factory=list)
+    #: per flight with ground truth: its altitude error's spread, drift kept (``altitude_drift``)
+    altitude_drift: list[float] = dataclasses.field(default_factory=list)
     #: per such flight: by how many seconds of velocity the estimate leads the truth
     lead: list[float] = dataclasses.field(default_factory=list)
     #: per such flight: EKF2's velocity error std fore-aft and sideways (body frame)
@@ -241,6 +244,7 @@ def _measure(ulog: ULog, into: Flights) -> None:
         truth = np.column_stack([gt[k] for k in cols])
         flown = (traj.t[0], traj.t[-1])
         into.truth.append(estimate_errors(t, estimate, gt["timestamp"] / 1e6, truth, flown))
+        into.altitude_drift.append(altitude_drift(t, lp["z"], gt["timestamp"] / 1e6, gt["z"], flown))
         into.vertical_truth.append(
             vertical_estimate_errors(
                 t,
@@ -495,6 +499,14 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "left out) / climb-rate std, m, m/s",
             _pair_means(px4_all.vertical_truth),
             _pair_means(ours_all.vertical_truth),
+            "",
+            "",
+        )
+        t.add_row(
+            "EKF2 altitude error against the ground truth while flying, its drift kept: spread "
+            "within a flight (std), m: mean (min–max)",
+            _spread(px4_all.altitude_drift),
+            _spread(ours_all.altitude_drift),
             "",
             "",
         )

@@ -55,6 +55,7 @@ __all__ = [
     "FlightFigures",
     "PairFigures",
     "Spread",
+    "altitude_drift",
     "arrival_velocity_errors",
     "body_frame_errors",
     "boot_time_correlation",
@@ -225,6 +226,28 @@ def vertical_estimate_errors(
     weight = np.maximum(np.convolve(flying, box, mode="same"), 1)
     trend = np.convolve(e[:, 0] * flying, box, mode="same") / weight
     return float((e[flying, 0] - trend[flying]).std()), float(e[flying, 1].std())
+
+
+def altitude_drift(
+    t: np.ndarray,
+    z: np.ndarray,
+    t_truth: np.ndarray,
+    z_truth: np.ndarray,
+    window: tuple[float, float],
+    rate: float = 10.0,
+) -> float:
+    """The spread of the estimated altitude's error against the ground truth within one flight,
+    its slow drift kept (what ``vertical_estimate_errors`` leaves out): the standard deviation of
+    estimate minus truth (z, NED) about its mean over the samples where the truth is
+    ``VERTICAL_AIRBORNE`` above its lowest point in the window. The controller flies the estimate,
+    so this is how far the vehicle truly strays above and below the altitude it holds."""
+    g = _grid(window, rate, "altitude drift")
+    e = np.interp(g, t, z) - np.interp(g, t_truth, z_truth)
+    altitude = -np.interp(g, t_truth, z_truth)
+    flying = altitude - altitude.min() > VERTICAL_AIRBORNE
+    if flying.sum() < 2:
+        raise BadInput("altitude drift: the truth never flew in the window")
+    return float(e[flying].std())
 
 
 def _grid(window: tuple[float, float], rate: float, what: str) -> np.ndarray:
