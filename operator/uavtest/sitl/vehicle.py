@@ -191,6 +191,7 @@ class Vehicle:
             random.Random(f"{seed}:estimator-z"),
             random.Random(f"{seed}:estimator-heading"),
             random.Random(f"{seed}:estimator-ground"),
+            random.Random(f"{seed}:estimator-height"),
         )
         if planner:
             self.est.gazebo_system()

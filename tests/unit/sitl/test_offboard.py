@@ -106,7 +106,10 @@ def test_arming_in_offboard_needs_the_signal_then_takes_off_to_the_setpoint():
     assert s.v.landed and s.v.body.z == pytest.approx(0.0, abs=0.05)
     s.stream(10, x=0.0, y=0.0, z=-5.0)
     assert not s.v.landed
-    assert s.v.body.z == pytest.approx(-5.0, abs=0.3)
+    # the vehicle holds its *estimate* there (what LOCAL_POSITION_NED says); the truth strays with
+    # EKF2's altitude drift (PX4 SIH: 0.35-0.40 m within a flight, its ground truth)
+    assert s.v.st.z == pytest.approx(-5.0, abs=0.3)
+    assert s.v.body.z == pytest.approx(-5.0, abs=1.2)
     assert s.v.nav_state == NavState.OFFBOARD
 
 
@@ -139,9 +142,9 @@ def test_velocity_setpoint_and_body_frame():
     yaw = s.v.st.yaw
     s.stream(8, vx=2.0, vy=0.0, vz=0.0, mask=VEL_ONLY, frame=8)
     assert s.v.body.vx == pytest.approx(2.0 * math.cos(yaw), abs=0.4)
-    # climb limited by MPC_Z_VEL_MAX_UP
+    # climb limited by MPC_Z_VEL_MAX_UP: the estimated climb rate (LOCAL_POSITION_NED's vz)
     s.stream(3, vx=0.0, vy=0.0, vz=-10.0, mask=VEL_ONLY)
-    assert -3.3 < s.v.body.vz < -2.5
+    assert -3.3 < s.v.body.vz + s.v.est.evz < -2.5
 
 
 def test_a_setpoint_with_an_empty_axis_stops_and_waits():
@@ -149,7 +152,8 @@ def test_a_setpoint_with_an_empty_axis_stops_and_waits():
     s = airborne_offboard()
     s.stream(2, vx=3.0, vy=0.0, mask=VEL_ONLY | 32)  # vz ignored too
     assert math.hypot(s.v.body.vx, s.v.body.vy) < 0.3
-    assert s.v.body.z == pytest.approx(-5.0, abs=0.4)
+    assert s.v.st.z == pytest.approx(-5.0, abs=0.4)  # the estimate held; the truth strays with it
+    assert s.v.body.z == pytest.approx(-5.0, abs=1.2)
     assert s.v.nav_state == NavState.OFFBOARD
 
 
@@ -209,7 +213,8 @@ def test_global_int_setpoint():
     # PX4 SIH against its ground truth), a wrong lat/lon conversion would be metres off
     assert (s.v.st.x, s.v.st.y) == (pytest.approx(10.0, abs=0.6), pytest.approx(5.0, abs=0.6))
     assert (s.v.body.x, s.v.body.y) == (pytest.approx(10.0, abs=0.8), pytest.approx(5.0, abs=0.8))
-    assert s.v.body.z == pytest.approx(-7.0, abs=0.4)
+    assert s.v.st.z == pytest.approx(-7.0, abs=0.4)  # and EKF2's altitude drift, up to ~1 m, truly
+    assert s.v.body.z == pytest.approx(-7.0, abs=1.2)
 
     def send_amsl() -> None:
         f = dict(
@@ -271,7 +276,8 @@ def test_offboard_loss_position_mode_with_sticks():
         s._collect(s.v.advance(s.v.time_us + 50_000))
     assert s.v.nav_state == NavState.POSCTL
     assert "Autopilot disengaged, switching to Position" in s.texts
-    assert s.v.body.z == pytest.approx(-5.0, abs=0.5)
+    assert s.v.st.z == pytest.approx(-5.0, abs=0.5)  # the estimate held; the truth strays with it
+    assert s.v.body.z == pytest.approx(-5.0, abs=1.2)
 
 
 def test_offboard_loss_disarm_and_terminate():

@@ -35,8 +35,10 @@ AFTER_LIFTOFF = (1.0, 2.0, 3.0, 4.0)  # s: the true height in the climb
 
 
 def _takeoff(ulog: ULog) -> tuple[np.ndarray, np.ndarray]:
-    """The collective thrust setpoint at ``AFTER_ARMING`` and the true height above the ground at
-    ``AFTER_LIFTOFF`` (lift-off: 0.3 m up)."""
+    """The collective thrust setpoint at ``AFTER_ARMING`` and the height at ``AFTER_LIFTOFF``
+    (lift-off: truly 0.3 m up) as the estimate climbed from there, which is what the controller
+    flies: the truth strays from it with EKF2's altitude drift (decimetres within seconds, in PX4
+    SIH as in the built-in vehicle since stop 34), which is not the takeoff's doing."""
     gt = ulog.get_dataset("vehicle_local_position_groundtruth").data
     tg, h = gt["timestamp"] / 1e6, -gt["z"]
     armed = ulog.get_dataset("actuator_armed").data
@@ -45,8 +47,9 @@ def _takeoff(ulog: ULog) -> tuple[np.ndarray, np.ndarray]:
     ground = float(np.median(h[(tg < t_arm) & (tg > t_arm - 2.0)]))
     t_lift = tg[np.flatnonzero((tg > t_arm) & (h > ground + 0.3))[0]]
     thrust = np.interp(t_arm + np.array(AFTER_ARMING), sp["timestamp"] / 1e6, -sp["thrust[2]"])
-    height = np.interp(t_lift + np.array(AFTER_LIFTOFF), tg, h) - ground
-    return thrust, height
+    lp = ulog.get_dataset("vehicle_local_position").data
+    estimated = -np.interp(t_lift + np.array((0.0, *AFTER_LIFTOFF)), lp["timestamp"] / 1e6, lp["z"])
+    return thrust, estimated[1:] - estimated[0] + 0.3
 
 
 @pytest.mark.skipif(not SQUARE.exists(), reason=f"shared PX4 SIH log not found: {SQUARE}")
@@ -63,7 +66,8 @@ def test_the_takeoff_ramps_its_thrust_up_from_zero_and_climbs_as_px4_sih(bench_s
     thrust = np.mean([t for t, _ in runs], axis=0)
     height = np.mean([h for _, h in runs], axis=0)
     assert np.all(np.abs(thrust - px4_thrust) < 0.05), (thrust, px4_thrust)
-    # PX4's own flights of this plan (8 flown here) climb 0.1-0.3 m above the shared one
+    # PX4's own flights of this plan (8 flown here) climb within 0.1 m of the shared one (1.3 / 2.5 /
+    # 3.8 / 5.2 m)
     assert np.all(np.abs(height - px4_height) < 0.4), (height, px4_height)
     assert np.all(np.diff(height) > 1.0)  # climbing at MPC_TKO_SPEED's pace, not hovering
 
