@@ -11,7 +11,6 @@ the shared PX4 SIH logs of the competition's missions (their estimated attitude)
 
 from __future__ import annotations
 
-import io
 import math
 import os
 from pathlib import Path
@@ -20,11 +19,9 @@ import numpy as np
 import pytest
 from pyulog import ULog
 
-from uavtest.sitl.inprocess import fly_mission
-from uavtest.sitl.recorder import MemorySink
 from uavtest.sitl.simulator_sih import GRAVITY, KICK_END, KICK_GAIN, KICK_TAU, KICK_WINDUP_MAX, Body
 
-from .conftest import competition
+from .conftest import competition_log
 
 REPO = Path(__file__).resolve().parents[3]
 SHARED = Path(os.environ.get("UAVTEST_SHARED_DATA", REPO.parent / "shared" / "data"))
@@ -106,12 +103,7 @@ def test_the_takeoff_kicks_the_attitude_as_in_px4_sih_logs(shared_data: Path) ->
     # the oracle: 4.2-15.5 degrees in the eight shared logs, median 6.9 (24 flown here: 2.8-19.4,
     # median 10.1)
     assert 4.0 < float(np.median(px4)) < 10.0, px4
-    ours = []
-    for seed in range(8):
-        config, items = competition(shared_data, 1, seed)
-        sink = MemorySink()
-        fly_mission(config, items, sink=sink)
-        ours.append(_tilt_peak_after_release(ULog(io.BytesIO(sink.logs[0]))))
+    ours = [_tilt_peak_after_release(competition_log(shared_data, 1, seed)) for seed in range(8)]
     # as large as all but the smallest of the shared logs' kicks (5.4 degrees), no larger than
     # their largest; a body let go level peaks at 4.2 (the tree before: its estimated tilt)
     assert sorted(px4)[1] < float(np.median(ours)) < max(px4), (ours, px4)
