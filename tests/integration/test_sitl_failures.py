@@ -178,9 +178,10 @@ def test_gps_loss_land_example_lands_inside_the_fence(repo_root: Path, tmp_path:
     for path in trajectories:
         rows = list(csv.DictReader(path.open()))
         t, x, y, z = (float(rows[-1][k]) for k in ("t", "x", "y", "z"))
-        # on the ground, inside the fence box: the estimated altitude, which EKF2 shifts by up to
-        # ~1.6 m once the range finder reads below its minimum on the ground (ekf2.py, PX4 SIH)
-        assert -20 < x < 60 and -20 < y < 60 and z > -2.0
+        # on the ground, inside the fence box: the estimated altitude, which ends up to ~2 m off the
+        # ground: EKF2's altitude drift in flight and its shift once the range finder reads below
+        # its minimum on the ground (ekf2.py; 40 PX4 SIH flights end at z -1.65..+2.12 m)
+        assert -20 < x < 60 and -20 < y < 60 and z > -2.5
         after = [float(r["z"]) for r in rows if float(r["t"]) > 28]
         assert after and min(after) < -3  # still in the air, then sank down
         assert t < 60  # came down within ~25 s of the loss (EKF2_NOAID_TOUT + descent)

