@@ -213,14 +213,10 @@ def vertical_estimate_errors(
     ``estimate``, ``truth``: (N, 2) columns z, vz."""
     g = _grid(window, rate, "vertical estimate errors")
     e = _errors_on(g, t, estimate, t_truth, truth, 2)
-    altitude = -np.interp(g, t_truth, truth[:, 0])
-    height = altitude - altitude.min()
     n = max(1, int(VERTICAL_TREND_S * rate))
     if len(g) <= n:
         raise BadInput("vertical estimate errors: the window is shorter than the trend", value=len(g) / rate)
-    flying = height > VERTICAL_AIRBORNE
-    if flying.sum() < 2:
-        raise BadInput("vertical estimate errors: the truth never flew in the window")
+    flying = _flying(g, t_truth, truth[:, 0], "vertical estimate errors")
     # the moving mean of the flying samples alone: the shift on the ground does not leak into it
     box = np.ones(n)
     weight = np.maximum(np.convolve(flying, box, mode="same"), 1)
@@ -242,12 +238,18 @@ def altitude_drift(
     ``VERTICAL_AIRBORNE`` above its lowest point in the window. The controller flies the estimate,
     so this is how far the vehicle truly strays above and below the altitude it holds."""
     g = _grid(window, rate, "altitude drift")
-    e = np.interp(g, t, z) - np.interp(g, t_truth, z_truth)
+    e = _errors_on(g, t, z[:, None], t_truth, z_truth[:, None], 1)[:, 0]
+    return float(e[_flying(g, t_truth, z_truth, "altitude drift")].std())
+
+
+def _flying(g: np.ndarray, t_truth: np.ndarray, z_truth: np.ndarray, what: str) -> np.ndarray:
+    """Where on ``g`` the truth (z, NED) is ``VERTICAL_AIRBORNE`` above its lowest point there;
+    ``what`` names the figure a window without a flight fails."""
     altitude = -np.interp(g, t_truth, z_truth)
     flying = altitude - altitude.min() > VERTICAL_AIRBORNE
     if flying.sum() < 2:
-        raise BadInput("altitude drift: the truth never flew in the window")
-    return float(e[flying].std())
+        raise BadInput(f"{what}: the truth never flew in the window")
+    return flying
 
 
 def _grid(window: tuple[float, float], rate: float, what: str) -> np.ndarray:
