@@ -66,6 +66,7 @@ from uavtest.analysis.fidelity import (
     pairs_between,
     pairs_within,
     pooled_autocorrelation,
+    share_noise,
     spread,
     takeoff_turned_back,
     velocity_errors,
@@ -612,6 +613,14 @@ def compare(console: Console, name: str, plan: Plan, shared: Flights, yours: Fli
         return False
     t, ok = table(name, px4, ours)
     console.print(t)
+    if not ok and len(px4.boot_x) > 1 and share_noise(px4.boot_x, px4.boot_y):
+        console.print(
+            f"  [yellow]note: these {len(px4.figures)} PX4 flights share their noise (EKF2 velocity errors "
+            f"alike at equal time since start: {_boot(px4)}): PX4 SIH seeds it with srand(1234) at "
+            "every start, so their run-to-run range is that of few noise realizations, while the "
+            "built-in vehicle draws independent noise per seed. More PX4 flights (--px4-logs) give "
+            "a yardstick across realizations.[/yellow]"
+        )
     if yours.figures and len(shared.figures) >= 2:
         console.print(yardstick_table(name, shared, yours, ours))
     per = statistics.mean(f.flight_time for f in ours.figures)

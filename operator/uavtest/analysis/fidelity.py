@@ -70,6 +70,7 @@ __all__ = [
     "pairs_between",
     "pairs_within",
     "pooled_autocorrelation",
+    "share_noise",
     "spread",
     "takeoff_turned_back",
     "velocity_errors",
@@ -341,6 +342,20 @@ def boot_time_correlation(series: Sequence[tuple[np.ndarray, np.ndarray]], lag: 
     if not best:
         raise BadInput("boot-time correlation: no two flights overlap in time")
     return float(np.median(best))
+
+
+#: boot-time correlation from which flights share their noise: independent noise gives about 0.2
+#: (the best of several lags), PX4 SIH's runs of a plan 0.45-0.93 (the shared logs)
+SHARED_NOISE = 0.4
+
+
+def share_noise(
+    x: Sequence[tuple[np.ndarray, np.ndarray]], y: Sequence[tuple[np.ndarray, np.ndarray]]
+) -> bool:
+    """Whether flights share one noise realization (PX4 SIH's ``srand(1234)``): the mean of the
+    x and y velocity errors' ``boot_time_correlation`` reaches ``SHARED_NOISE``. Their
+    run-to-run range is then that of few realizations, narrower than across realizations."""
+    return (boot_time_correlation(x) + boot_time_correlation(y)) / 2 >= SHARED_NOISE
 
 
 def pooled_autocorrelation(series: Sequence[np.ndarray], lag: int) -> float:

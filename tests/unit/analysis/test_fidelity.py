@@ -20,6 +20,7 @@ from uavtest.analysis.fidelity import (
     pairs_between,
     pairs_within,
     pooled_autocorrelation,
+    share_noise,
     spread,
     takeoff_turned_back,
     velocity_errors,
@@ -228,6 +229,22 @@ def test_boot_time_correlation_tells_one_noise_realization_from_independent_ones
         boot_time_correlation(same[:1])
     with pytest.raises(BadInput, match="overlap"):
         boot_time_correlation([(t, shared), (t + 100.0, shared)])
+
+
+def test_flights_share_their_noise_when_their_errors_are_alike_at_equal_time_since_start() -> None:
+    rng = np.random.default_rng(11)
+    t = np.arange(0.0, 60.0, 0.1)
+
+    def smooth() -> np.ndarray:
+        return np.convolve(rng.standard_normal(len(t) + 20), np.ones(20) / 20, mode="valid")[: len(t)]
+
+    sx, sy = smooth(), smooth()
+    same_x = [(t, np.roll(sx, k) + 0.05 * rng.standard_normal(len(t))) for k in (0, 4, 9)]
+    same_y = [(t, np.roll(sy, k) + 0.05 * rng.standard_normal(len(t))) for k in (0, 4, 9)]
+    own_x = [(t, smooth()) for _ in range(3)]
+    own_y = [(t, smooth()) for _ in range(3)]
+    assert share_noise(same_x, same_y)
+    assert not share_noise(own_x, own_y)
 
 
 def _vertical_truth() -> tuple[np.ndarray, np.ndarray]:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from uavtest.analysis.fidelity import flight_figures, pairs_between
+from uavtest.analysis.fidelity import flight_figures, pairs_between, share_noise
 from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
 from uavtest.sitl.inprocess import fly_mission
 from uavtest.sitl.recorder import MemorySink
@@ -135,3 +135,19 @@ def test_a_flight_that_stops_making_progress_ends_as_uavtest_run_ends_it_and_is_
     flights, _ = bench_fidelity.builtin_flights(lambda i: plan((0, 3)[i]), 2)
     assert flights.completed == [False, True]
     assert len(flights.figures) == 1  # the stalled one is only counted
+
+
+def test_a_px4_range_drawn_from_shared_noise_is_said_to_be_one(shared_data: Path, bench_fidelity) -> None:
+    """The shared mission2 logs are one noise realization (PX4 SIH's srand(1234): their EKF2
+    velocity errors correlate 0.84-1.0 at equal time since start); built-in seeds are not. The
+    bench says so beside a figure outside that range, so a user reads the range for what it is."""
+    logs = sorted((shared_data / "px4-sih").glob("competition-mission2-*.ulg"))
+    px4 = bench_fidelity.Flights([], [])
+    for log in logs:
+        bench_fidelity._measure(read_ulog(log), px4)
+    assert share_noise(px4.boot_x, px4.boot_y)
+    ours, _ = bench_fidelity.builtin_flights(bench_fidelity.competition(2), 4)
+    assert not share_noise(ours.boot_x, ours.boot_y)
+    run = _bench("--seeds", "3", "--plans", "mission2", data=shared_data)
+    assert run.returncode == 1, run.stdout + run.stderr  # mission2's path shape: outside (0.60 vs 0.53)
+    assert "note: these 4 PX4 flights share their noise" in " ".join(run.stdout.split())
