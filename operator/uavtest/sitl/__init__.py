@@ -13,21 +13,6 @@ finished logs over MAVLink);
 ``inprocess.fly_mission`` flies a mission without sockets.
 """
 
-from __future__ import annotations
-
-from typing import TYPE_CHECKING, Any
-
-if TYPE_CHECKING:
-    from uavtest.sitl.vehicle import SimConfig, Vehicle
-
 __all__ = ["SimConfig", "Vehicle"]
 
-
-def __getattr__(name: str) -> Any:
-    """``SimConfig`` and ``Vehicle`` on first use: a process that needs one module of the
-    simulator (the runner's range-sensor model, say) does not import the whole vehicle."""
-    if name in __all__:
-        from uavtest.sitl import vehicle
-
-        return getattr(vehicle, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+from uavtest.sitl.vehicle import SimConfig, Vehicle
