@@ -44,7 +44,7 @@ def local_position_ned(v: Vehicle, t: int) -> Msg:
 def attitude(v: Vehicle, t: int) -> Msg:
     """streams/ATTITUDE.hpp: vehicle_attitude's Euler angles, vehicle_angular_velocity's body rates."""
     b = v.body
-    roll, pitch = b.tilt()
+    roll, pitch = v.estimated_tilt(*b.tilt())
     p, q, r = b.rates()
     return Msg(
         "ATTITUDE",
@@ -147,7 +147,8 @@ _ISA_P0 = 101325.0  # Pa
 
 
 def _attitude(v: Vehicle) -> tuple[float, float, float]:
-    roll, pitch = v.body.tilt()
+    """vehicle_attitude: EKF2's roll, pitch (off the truth by its tilt error) and heading."""
+    roll, pitch = v.estimated_tilt(*v.body.tilt())
     return roll, pitch, v.st.yaw
 
 
@@ -249,7 +250,8 @@ def highres_imu(v: Vehicle, t: int) -> Msg:
     -g on the ground) and the magnetic field rotated into the body frame, body rates, baro from
     the ISA at the true altitude, constant temperature."""
     b = v.body
-    roll, pitch, yaw = _attitude(v)
+    roll, pitch = b.tilt()  # the IMU turns with the true body
+    yaw = v.st.yaw
     if b.on_ground:
         fn, fe, fd = 0.0, 0.0, -GRAVITY
     else:  # the last physics step's kinematic acceleration, less gravity

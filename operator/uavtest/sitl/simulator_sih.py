@@ -238,6 +238,8 @@ class Body:
         "kq",
         "kx",
         "ky",
+        "lean_x",
+        "lean_y",
         "liftoff_acc",
         "motors",
         "on_ground",
@@ -311,6 +313,10 @@ class Body:
         self.kick_s = -1.0  # seconds since the release; < 0: no kick
         self.kick_x = self.kick_y = 0.0  # the kick's peak, m/s^2 of horizontal acceleration
         self.kx = self.ky = 0.0  # the kick's acceleration now
+        #: EKF2's tilt error (rad, NED: as horizontal acceleration / g; ``ekf2.Estimator.tx``):
+        #: the attitude loops level the *estimated* body, so the true thrust leans that much the
+        #: other way, and the rate integrators wind up against it on the ground
+        self.lean_x = self.lean_y = 0.0
 
     def step(
         self, dt: float, cax: float, cay: float, caz: float, cyawrate: float, wn: float, we: float, wd: float
@@ -336,8 +342,9 @@ class Body:
         self.az += (caz - self.az) * (dt / TAU_THRUST)
         rx, ry, rz = self.vx - wn, self.vy - we, self.vz - wd
         drag = self.kl + self.kq * math.sqrt(rx * rx + ry * ry)
-        fx = self.ax - drag * rx
-        fy = self.ay - drag * ry
+        lift = GRAVITY - self.az
+        fx = self.ax - lift * self.lean_x - drag * rx
+        fy = self.ay - lift * self.lean_y - drag * ry
         fz = self.az - DRAG_VERTICAL * rz
         if self.kick_s >= 0.0:
             r = self.kick_s / KICK_TAU
@@ -357,8 +364,8 @@ class Body:
                 if self.windup:
                     self.ax = self.ay = 0.0  # SIH's ground holds the body still, here level
                     if self.rate_integrating and self.motors:
-                        wx = self.wx + cax / GRAVITY * dt
-                        wy = self.wy + cay / GRAVITY * dt
+                        wx = self.wx + (cax / GRAVITY - self.lean_x) * dt
+                        wy = self.wy + (cay / GRAVITY - self.lean_y) * dt
                         w = math.hypot(wx, wy)
                         if w > KICK_WINDUP_MAX:  # the integrators' limit
                             wx, wy = wx * KICK_WINDUP_MAX / w, wy * KICK_WINDUP_MAX / w
@@ -423,12 +430,15 @@ class Body:
         """(roll, pitch) radians of the thrust's direction at this yaw: the horizontal
         acceleration against the vertical one as the attitude loops have it (``azt``)."""
         c, s = math.cos(self.yaw), math.sin(self.yaw)
-        ax, ay = self.ax + self.kx, self.ay + self.ky
-        fwd = c * ax + s * ay
-        right = -s * ax + c * ay
         lift = GRAVITY - self.azt
         if lift <= 0.1:
             lift = 0.1
+        ax, ay = self.ax + self.kx, self.ay + self.ky
+        if not self.on_ground:  # the ground holds the body level
+            ax -= lift * self.lean_x
+            ay -= lift * self.lean_y
+        fwd = c * ax + s * ay
+        right = -s * ax + c * ay
         return math.atan2(right, lift), -math.atan2(fwd, lift)
 
     def rates(self) -> tuple[float, float, float]:

@@ -192,6 +192,7 @@ class Vehicle:
             random.Random(f"{seed}:estimator-heading"),
             random.Random(f"{seed}:estimator-ground"),
             random.Random(f"{seed}:estimator-height"),
+            random.Random(f"{seed}:estimator-tilt"),
         )
         if planner:
             self.est.gazebo_system()
@@ -511,6 +512,12 @@ class Vehicle:
 
     # ------------------------------------------------------------------ estimate
 
+    def estimated_tilt(self, roll: float, pitch: float) -> tuple[float, float]:
+        """EKF2's (roll, pitch) of a true (roll, pitch): off by its tilt error (``ekf2``)."""
+        e = self.est
+        c, s = math.cos(self.body.yaw), math.sin(self.body.yaw)
+        return roll + (-s * e.tx + c * e.ty), pitch - (c * e.tx + s * e.ty)
+
     def _estimate(self) -> None:
         b, e, st = self.body, self.est, self.st
         st.x, st.y, st.z = b.x + e.ex, b.y + e.ey, b.z + e.ez
@@ -546,6 +553,9 @@ class Vehicle:
             self.est.range_lost()
         else:
             self.est.range_fused(-self.body.z, self.land.landed)
+        self.est.update_tilt(dt, self.commander.armed, not self.body.on_ground)
+        # and with EKF2's roll and pitch off by (tx, ty), the body leans that much the other way
+        self.body.lean_x, self.body.lean_y = self.est.tx, self.est.ty
         self.est.update(dt, self.body.vx, self.body.vy, self.body.yaw)
         self.wind.update(dt)
         if self._tick % (CONTROL_EVERY * 10) == 0:
@@ -863,7 +873,8 @@ class Vehicle:
         )
         if tick % (CONTROL_EVERY * 2) == 0:  # 25 Hz
             roll, pitch = b.tilt()
-            q = topics.quaternion(roll, pitch, st.yaw)
+            er, ep = self.estimated_tilt(roll, pitch)
+            q = topics.quaternion(er, ep, st.yaw)
             rec.data(topics.VehicleAttitude(t, t, q, (0.0, 0.0, 0.0, 0.0), 0))
             # the truth next to the estimate, as PX4 SITL logs it (SIH's *_groundtruth topics)
             qt = topics.quaternion(roll, pitch, b.yaw)

@@ -243,11 +243,13 @@ def test_a_return_lands_facing_home_heading() -> None:
     heading home was set with (armed facing North), the vehicle lands facing it."""
     v = _hover_at(30.0, 10.0)
     home_yaw = v.commander.home[6]
-    assert abs(wrap_pi(v.st.yaw - math.radians(90.0))) < math.radians(10.0)  # flew out facing East
+    # flew out facing East (the heading locks on the last approach, which EKF2's errors turn)
+    assert abs(wrap_pi(v.st.yaw - math.radians(90.0))) < math.radians(15.0)
     texts, track = _return(v)
     # the last half of the leg (the first turns 180 degrees at MPC_YAWRAUTO_MAX, overshooting)
     on_the_way = [yaw for east, alt, yaw, _ in track if 3.0 < east < 15.0 and alt > 29.0]
-    assert on_the_way and all(abs(wrap_pi(yaw + math.pi / 2)) < math.radians(10.0) for yaw in on_the_way)
+    # (within 12 degrees: a few metres out, half a metre off the track turns the way home by 10)
+    assert on_the_way and all(abs(wrap_pi(yaw + math.pi / 2)) < math.radians(12.0) for yaw in on_the_way)
     touchdown = next(yaw for _, _, yaw, landed in track if landed)
     assert abs(wrap_pi(touchdown - home_yaw)) < math.radians(5.0), math.degrees(touchdown)
     assert "RTL: land at destination" in texts

@@ -90,7 +90,7 @@ def test_moving_the_sticks_in_a_mission_takes_over_in_position_mode():
     assert f.v.nav_state == NavState.POSCTL and f.v.user_nav_state == NavState.POSCTL
     assert [s for _, s in f.since(t0)] == [TOOK_OVER]
     f.fly(4, each=lambda: f.sticks(x=-500))  # the pilot flies: backwards (South), not on to the waypoint
-    assert f.v.body.vx < -1.0 and f.v.nav_state == NavState.POSCTL
+    assert f.v.st.vx < -1.0 and f.v.nav_state == NavState.POSCTL
     assert not f.v.nav.finished
 
 
