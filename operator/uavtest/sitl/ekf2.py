@@ -111,6 +111,8 @@ from __future__ import annotations
 import math
 import random
 
+from uavtest.sitl.simulator_sih import GRAVITY
+
 __all__ = ["GPS_LEAD_S", "Estimator"]
 
 TAU = 4.0  # s: position error leak (GPS corrections)
@@ -257,7 +259,6 @@ TILT_SMOOTH_S = 0.5  # s
 #: stationary standard deviation of x for x' = -x / TAU + v, v Gauss-Markov(sigma_v, TAU_V):
 #: sigma_x^2 = sigma_v^2 * TAU_V * TAU^2 / (TAU_V + TAU)
 _GAIN = math.sqrt(TAU_V * TAU * TAU / (TAU_V + TAU))
-_G = 9.80665  # m/s^2
 
 
 def _bias_gain(tau: float, seconds: float) -> float:
@@ -276,7 +277,7 @@ class Estimator:
 
     ``ex, ey, ez`` (m) and ``evx, evy, evz`` (m/s) are the errors of the logged position and
     velocity (NED), ``eh`` (rad) of the heading; ``bx, by`` (m/s) the part of ``evx, evy`` that
-    the position does not integrate.
+    the position does not integrate; ``tx, ty`` (rad, NED) of the roll and pitch (``update_tilt``).
     """
 
     __slots__ = (
@@ -447,8 +448,8 @@ class Estimator:
             kb = dt / TILT_BALANCE_TAU
             self._tbx += (self.tx - self._tbx) * kb
             self._tby += (self.ty - self._tby) * kb
-            self._tvx = av * self._tvx + _G * (self.tx - self._tbx) * dt
-            self._tvy = av * self._tvy + _G * (self.ty - self._tby) * dt
+            self._tvx = av * self._tvx + GRAVITY * (self.tx - self._tbx) * dt
+            self._tvy = av * self._tvy + GRAVITY * (self.ty - self._tby) * dt
         else:
             self._tbx = self._tby = 0.0
             self._tvx *= av
