@@ -31,7 +31,9 @@ from uavtest.sitl.recorder import MemorySink
 
 from .conftest import competition
 
-SEEDS = 6
+#: with 6 seeds the means swung by about 0.1 m between seed sets (mission2's altitude error 0.96
+#: on seeds 0-5, 0.81 over 100 seeds at stop 37): a coin toss against the bounds, not a check
+SEEDS = 12
 FIGURE_FACTOR = 2.5  # built-in vs PX4 (mean) <= this x PX4 vs PX4 (max)
 FLIGHT_TIME_MARGIN = 6.0  # s outside PX4's flight-time range
 JITTER_FACTOR = 2.0  # x PX4's velocity jitter (white noise on the position would give ~3x)
