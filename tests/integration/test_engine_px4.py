@@ -190,8 +190,12 @@ def test_a_px4_on_the_ground_at_another_altitude_flies_with_a_warning(
     result, log = fly_one(test, px4_bin, tmp_path / "out", without_the_ground_altitude)
     assert result.verdict is Verdict.PASS, f"{result.reason}\n{log[-3000:]}"
     (warning,) = [w for w in result.warnings if w.startswith("home altitude mismatch")]
-    # SIH's default ground, 32.34 m, and the estimator's fraction of a metre above it
-    assert re.search(r"home is at 3[23] m AMSL, the test's world.home at 488 m \(-45[56] m\)", warning)
+    # SIH's default ground, 32.34 m, give or take EKF2's height when it armed: 32-33 m in most
+    # flights, 31 m in one at stop 37 (PX4 home is the estimate, not the ground truth)
+    found = re.search(r"home is at (\d+) m AMSL, the test's world.home at 488 m \((-\d+) m\)", warning)
+    assert found, warning
+    home, diff = int(found[1]), int(found[2])
+    assert abs(home - 32.34) <= 2.0 and diff == home - 488, warning
 
 
 def _hold_heading(ulog: Path, north: float, east: float) -> float:
