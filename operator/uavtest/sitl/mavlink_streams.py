@@ -43,16 +43,15 @@ def local_position_ned(v: Vehicle, t: int) -> Msg:
 
 def attitude(v: Vehicle, t: int) -> Msg:
     """streams/ATTITUDE.hpp: vehicle_attitude's Euler angles, vehicle_angular_velocity's body rates."""
-    b = v.body
-    roll, pitch = v.estimated_tilt(*b.tilt())
-    p, q, r = b.rates()
+    roll, pitch, yaw = _attitude(v)
+    p, q, r = v.body.rates()
     return Msg(
         "ATTITUDE",
         {
             "time_boot_ms": t // 1000,
             "roll": roll,
             "pitch": pitch,
-            "yaw": v.st.yaw,
+            "yaw": yaw,
             "rollspeed": p,
             "pitchspeed": q,
             "yawspeed": r,
