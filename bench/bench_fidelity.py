@@ -50,8 +50,17 @@ from uavtest.analysis.attitude_response import (
     body_z_from_thrust,
 )
 from uavtest.analysis.attitude_response import fit as fit_attitude_response
+from uavtest.analysis.estimate_phases import (
+    CLIMB_AFTER,
+    SpeedErrors,
+    body_errors_by_speed,
+    climb_wander,
+    tilt_push_response,
+    tilt_push_series,
+)
 from uavtest.analysis.fidelity import (
     FIGURES,
+    LIFTOFF_RISE,
     FlightFigures,
     altitude_drift,
     arrival_velocity_errors,
@@ -94,6 +103,8 @@ from uavtest.sitl.vehicle import SimConfig, Vehicle
 from uavtest.spec.loaders import load_test
 from uavtest.spec.mission import mission_items
 from uavtest.spec.models import Avoidance, Home
+
+LEG_SPEED = 1.5  # m/s: faster than this after the climb, the vehicle has set off on its first leg
 
 REPO = Path(__file__).resolve().parent.parent
 SHARED = Path(os.environ.get("UAVTEST_SHARED_DATA", REPO.parent / "shared" / "data"))
@@ -192,6 +203,12 @@ class Flights:
     brakes: list[MidLegBrakes] = dataclasses.field(default_factory=list)
     #: per flight with a mission_result: whether its takeoff turned back (``takeoff_turned_back``)
     stalls: list[bool] = dataclasses.field(default_factory=list)
+    #: per flight with ground truth: EKF2's velocity error at rest and at cruise (body frame)
+    speed_errors: list[SpeedErrors] = dataclasses.field(default_factory=list)
+    #: per flight: the estimate's horizontal wander in the climb (``climb_wander``), m
+    wander: list[float] = dataclasses.field(default_factory=list)
+    #: per flight with attitude ground truth: (push, velocity error) at low speed
+    push: list = dataclasses.field(default_factory=list)
     #: per flight: whether it finished its mission (``mission_result``); the others are counted
     #: here and measured nowhere else (a stalled or blocked flight has no path to compare)
     completed: list[bool] = dataclasses.field(default_factory=list)
@@ -234,6 +251,14 @@ def _measure(ulog: ULog, into: Flights) -> None:
         flying = t >= traj.t[0]  # from lift-off: before it the estimate may still be converging
         if len(reached):
             into.stalls.append(takeoff_turned_back(t[flying], -lp["z"][flying], float(reached[0])))
+            # the climb: from lift-off until the takeoff item is reached or the vehicle sets off
+            # (PX4's logs may report the takeoff item late, with the first waypoint)
+            risen = np.flatnonzero(traj.altitude >= traj.altitude[0] + LIFTOFF_RISE)
+            liftoff = float(traj.t[risen[0]]) if len(risen) else float(traj.t[0])
+            off = np.flatnonzero((t > liftoff + CLIMB_AFTER) & (np.hypot(lp["vx"], lp["vy"]) > LEG_SPEED))
+            until = min(float(reached[0]), float(t[off[0]]) if len(off) else np.inf)
+            with contextlib.suppress(BadInput):  # a climb shorter than 6 s (a low takeoff item)
+                into.wander.append(climb_wander(t, lp["x"], lp["y"], liftoff, until))
     att = ulog.get_dataset("vehicle_attitude").data
     vertical = displacement_errors(t[air], lp["z"][air], lp["vz"][air])
     if len(vertical):
@@ -261,6 +286,28 @@ def _measure(ulog: ULog, into: Flights) -> None:
         velocity = np.column_stack([lp["vx"], lp["vy"], lp["heading"]])
         into.body.append(body_frame_errors(t, velocity, gt["timestamp"] / 1e6, truth[:, 2:], flown))
         into.braking += braking_velocity_errors(t, estimate, gt["timestamp"] / 1e6, truth[:, 2:], changes)
+        inside = (traj.t[0] + 5.0, traj.t[-1] - 5.0)
+        into.speed_errors.append(
+            body_errors_by_speed(t, velocity, gt["timestamp"] / 1e6, truth[:, 2:], inside)
+        )
+        if any(d.name == "vehicle_attitude_groundtruth" for d in ulog.data_list):
+            ag = ulog.get_dataset("vehicle_attitude_groundtruth").data
+            at = ulog.get_dataset("vehicle_attitude").data
+            quat = [np.column_stack([d[f"q[{i}]"] for i in range(4)]) for d in (at, ag)]
+            with contextlib.suppress(BadInput):  # never slow for 2 s in the window
+                into.push.append(
+                    tilt_push_series(
+                        t,
+                        estimate[:, 2:],
+                        gt["timestamp"] / 1e6,
+                        truth[:, 2:],
+                        at["timestamp"] / 1e6,
+                        quat[0],
+                        ag["timestamp"] / 1e6,
+                        quat[1],
+                        (traj.t[0] + 6.0, traj.t[-1] - 3.0),
+                    )
+                )
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
     q = np.column_stack([att[f"q[{i}]"] for i in range(4)])
@@ -293,7 +340,24 @@ def _brakes(brakes: list[MidLegBrakes]) -> str:
     if not to_go:
         return f"0 in {legs} legs"
     where = f"{statistics.median(to_go):.0f} m before the end ({min(to_go):.0f}–{max(to_go):.0f})"
-    return f"{len(to_go)} in {legs} legs; {where}"
+    after = [a for b in brakes for a in b.after]
+    when = f"; {statistics.median(after):.1f} s into it, {sum(a < 6.0 for a in after)} within 6 s"
+    return f"{len(to_go)} in {legs} legs; {where}{when}"
+
+
+def _speed_errors(errors: list[SpeedErrors]) -> str:
+    """Fore-aft / sideways rms at rest, then at cruise: the mean over flights that have samples."""
+
+    def mean(attr: str) -> float:
+        values = [getattr(e, attr) for e in errors if np.isfinite(getattr(e, attr))]
+        return float(np.mean(values)) if values else float("nan")
+
+    rest = f"{mean('rest_fore'):.2f} / {mean('rest_side'):.2f}"
+    return f"{rest} → {mean('cruise_fore'):.2f} / {mean('cruise_side'):.2f}"
+
+
+def _wander(wander: list[float]) -> str:
+    return f"{statistics.median(wander):.2f}; {np.percentile(wander, 90):.2f} ({len(wander)} flights)"
 
 
 def _exits(exits: list[CornerExit]) -> str:
@@ -451,6 +515,34 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "a leg of 40 m or more until 10 m before its end)",
             _brakes(px4_all.brakes),
             _brakes(ours_all.brakes),
+            "",
+            "",
+        )
+    if px4_all.speed_errors and ours_all.speed_errors:
+        t.add_row(
+            "EKF2 velocity error against the truth, body frame fore-aft / sideways, rms m/s: at rest "
+            "(< 0.5 m/s) → at a steady cruise (> 4.2 m/s)",
+            _speed_errors(px4_all.speed_errors),
+            _speed_errors(ours_all.speed_errors),
+            "",
+            "",
+        )
+    if px4_all.wander and ours_all.wander:
+        t.add_row(
+            "the estimate's horizontal wander in the climb (from 5 s after lift-off to the takeoff "
+            "item), median; p90, m",
+            _wander(px4_all.wander),
+            _wander(ours_all.wander),
+            "",
+            "",
+        )
+    if px4_all.push and ours_all.push:
+        theirs, mine = tilt_push_response(px4_all.push), tilt_push_response(ours_all.push)
+        t.add_row(
+            "velocity error against g x the tilt error, leaky over 1 s, below 1 m/s: slope "
+            "(correlation); 1: EKF2 misses the push",
+            f"{theirs.slope:.2f} ({theirs.correlation:.2f})",
+            f"{mine.slope:.2f} ({mine.correlation:.2f})",
             "",
             "",
         )

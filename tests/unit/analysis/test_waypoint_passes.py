@@ -143,6 +143,7 @@ def test_an_offtrack_stop_in_cruise_is_one_brake_and_where_it_was():
     brakes = midleg_brakes(t, x, y, vx, vy, LEG)
     assert len(brakes.to_go) == 1
     assert brakes.to_go[0] == pytest.approx(30.0, abs=0.2)
+    assert brakes.after == (pytest.approx(6.0, abs=0.1),)  # 6 s into the leg
 
 
 def test_the_start_of_a_leg_and_its_braking_into_the_waypoint_do_not_count():

@@ -1,0 +1,182 @@
+"""How EKF2's errors depend on what the vehicle is doing: at rest or at cruise, in the climb, and
+with its own tilt error. Pure functions over logged arrays (``vehicle_local_position``, its ground
+truth, ``vehicle_attitude`` and its ground truth); ``bench/bench_fidelity.py`` prints them for PX4
+v1.15 SIH's flights and the built-in vehicle's side by side.
+
+- ``body_errors_by_speed``: the estimated velocity's error against the truth, in the body frame
+  (the estimated heading), rms fore-aft and sideways, at rest in the air and at a steady cruise.
+  24 PX4 SIH flights of the competition missions (stops 35-36): 0.15 / 0.22 m/s at rest, 0.17 /
+  0.30 at a cruise above 4.2 m/s. The error grows with the speed, mostly sideways.
+- ``climb_wander``: how far the estimate strays horizontally from where it lifted off while it
+  climbs, from 5 s after lift-off (the takeoff's slide is over) until the takeoff item is
+  reached. The controller holds the estimate on the takeoff point, so this is the part of EKF2's
+  velocity error its position does not follow. A first leg that starts more than the acceptance
+  radius off its track goes "offtrack" (FlightTaskAuto) and brakes early. 24 PX4 SIH flights,
+  8-10 s after lift-off: 0.20 m median, 0.37 p90; the built-in vehicle 0.23-0.29, 0.53 (stop 38).
+- ``tilt_push_response``: at low speed, the velocity error against the leaky integral (1 s) of
+  g x the tilt error (the estimated body z axis's horizontal offset from the true one): its
+  least-squares slope and correlation. The attitude controller levels the estimated body, so the
+  true thrust leans by the tilt error and EKF2 misses that push until GPS fusion takes it back.
+  24 PX4 SIH flights: slope 0.86, correlation 0.62; the built-in vehicle 0.30, 0.24 (stop 38).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from uavtest.errors import BadInput
+
+__all__ = [
+    "CLIMB_AFTER",
+    "CRUISE_SPEED",
+    "REST_SPEED",
+    "SLOW_SPEED",
+    "SpeedErrors",
+    "TiltPush",
+    "body_errors_by_speed",
+    "climb_wander",
+    "tilt_push_response",
+    "tilt_push_series",
+]
+
+GRAVITY = 9.80665  # m/s^2
+REST_SPEED = 0.5  # m/s: below this the vehicle is at rest (hovering, climbing, descending)
+CRUISE_SPEED = 4.2  # m/s: above this, and not accelerating, it cruises
+STEADY_ACC = 0.5  # m/s^2: the true horizontal acceleration (0.5 s mean) below which it is steady
+SLOW_SPEED = 1.0  # m/s: ``tilt_push_response`` looks below this speed
+CLIMB_AFTER = 5.0  # s after lift-off: the takeoff's slide is over, the climb goes on
+PUSH_TAU = 1.0  # s: the leaky integral of g x the tilt error (``ekf2.TILT_VEL_TAU``)
+RATE = 20.0  # Hz: every series is resampled onto this grid
+
+
+@dataclass(frozen=True, slots=True)
+class SpeedErrors:
+    """One flight's velocity error (m/s rms, body frame) at rest and at cruise; NaN where it has
+    fewer than ``min_samples`` samples (``body_errors_by_speed``)."""
+
+    rest_fore: float
+    rest_side: float
+    cruise_fore: float
+    cruise_side: float
+
+
+@dataclass(frozen=True, slots=True)
+class TiltPush:
+    """The velocity error's least-squares response to g x the tilt error, leaky-integrated."""
+
+    slope: float
+    correlation: float
+    samples: int
+
+
+def _grid(window: tuple[float, float], what: str) -> np.ndarray:
+    start, end = window
+    if not end - start > 1.0:
+        raise BadInput(f"{what}: the window {start:.1f}-{end:.1f} s is shorter than a second")
+    return np.arange(start, end, 1.0 / RATE)
+
+
+def _rms(x: np.ndarray, min_samples: int) -> float:
+    return float(np.sqrt(np.mean(x * x))) if len(x) >= min_samples else float("nan")
+
+
+def body_errors_by_speed(
+    t: np.ndarray,
+    estimate: np.ndarray,
+    t_truth: np.ndarray,
+    truth: np.ndarray,
+    window: tuple[float, float],
+    min_samples: int = 40,
+) -> SpeedErrors:
+    """``estimate``: (N, 3) vx, vy (NED), heading (rad) as ``vehicle_local_position`` logs them;
+    ``truth``: (M, 2) true vx, vy; ``window``: the seconds to look at (in the air). At rest: the
+    true horizontal speed below ``REST_SPEED``; at cruise: above ``CRUISE_SPEED`` while the true
+    acceleration (0.5 s mean) stays below ``STEADY_ACC``."""
+    g = _grid(window, "body errors by speed")
+    vx, vy = np.interp(g, t_truth, truth[:, 0]), np.interp(g, t_truth, truth[:, 1])
+    ex = np.interp(g, t, estimate[:, 0]) - vx
+    ey = np.interp(g, t, estimate[:, 1]) - vy
+    psi = np.interp(g, t, np.unwrap(estimate[:, 2]))
+    c, s = np.cos(psi), np.sin(psi)
+    fore, side = c * ex + s * ey, -s * ex + c * ey
+    k = max(1, round(0.5 * RATE))
+    ax = np.convolve(np.gradient(vx, g), np.ones(k) / k, "same")
+    ay = np.convolve(np.gradient(vy, g), np.ones(k) / k, "same")
+    speed = np.hypot(vx, vy)
+    rest = speed < REST_SPEED
+    cruise = (speed > CRUISE_SPEED) & (np.hypot(ax, ay) < STEADY_ACC)
+    return SpeedErrors(
+        rest_fore=_rms(fore[rest], min_samples),
+        rest_side=_rms(side[rest], min_samples),
+        cruise_fore=_rms(fore[cruise], min_samples),
+        cruise_side=_rms(side[cruise], min_samples),
+    )
+
+
+def climb_wander(
+    t: np.ndarray, x: np.ndarray, y: np.ndarray, liftoff: float, until: float, after: float = CLIMB_AFTER
+) -> float:
+    """The estimate's mean horizontal distance (m) from where it was at ``liftoff`` (s), from
+    ``after`` seconds after it until ``until`` (s: the takeoff item reached). A climb shorter than
+    that plus a second raises ``BadInput``."""
+    g = _grid((liftoff + after, min(until, float(t[-1]))), "climb wander")
+    x0, y0 = np.interp(liftoff, t, x), np.interp(liftoff, t, y)
+    return float(np.mean(np.hypot(np.interp(g, t, x) - x0, np.interp(g, t, y) - y0)))
+
+
+def _body_z(q: np.ndarray) -> np.ndarray:
+    """(N, 2): the horizontal (north, east) components of the body z axis of (N, 4) w, x, y, z
+    quaternions (body to NED)."""
+    w, a, b, c = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    return np.column_stack([2.0 * (a * c + w * b), 2.0 * (b * c - w * a)])
+
+
+def tilt_push_series(
+    t: np.ndarray,
+    velocity: np.ndarray,
+    t_truth: np.ndarray,
+    truth_velocity: np.ndarray,
+    t_att: np.ndarray,
+    q: np.ndarray,
+    t_att_truth: np.ndarray,
+    q_truth: np.ndarray,
+    window: tuple[float, float],
+) -> tuple[np.ndarray, np.ndarray]:
+    """One flight's (push, velocity error) samples, both axes, where the true speed is below
+    ``SLOW_SPEED`` within ``window``, each about its mean. ``velocity`` / ``truth_velocity``: (N, 2)
+    / (M, 2) horizontal velocities (NED) of the estimate and the truth; ``q`` / ``q_truth``:
+    attitudes (w, x, y, z). The push is -g x the body z axis's horizontal offset (estimate minus
+    truth), leaky-integrated over ``PUSH_TAU``: a tilt error towards north hides a push towards
+    south. A flight with no slow stretch of 2 s raises ``BadInput``."""
+    g = _grid(window, "tilt push")
+    est = np.column_stack([np.interp(g, t_att, q[:, i]) for i in range(4)])
+    tru = np.column_stack([np.interp(g, t_att_truth, q_truth[:, i]) for i in range(4)])
+    offset = _body_z(est) - _body_z(tru)
+    a = np.exp(-1.0 / (RATE * PUSH_TAU))
+    push = np.zeros_like(offset)
+    for i in range(1, len(g)):
+        push[i] = a * push[i - 1] - GRAVITY * offset[i] / RATE
+    vt = np.column_stack([np.interp(g, t_truth, truth_velocity[:, i]) for i in range(2)])
+    err = np.column_stack([np.interp(g, t, velocity[:, i]) for i in range(2)]) - vt
+    slow = np.hypot(vt[:, 0], vt[:, 1]) < SLOW_SPEED
+    if slow.sum() < 2 * RATE:
+        raise BadInput("tilt push: the vehicle was slower than 1 m/s for less than 2 s")
+    p, e = push[slow], err[slow]
+    return (p - p.mean(axis=0)).ravel(), (e - e.mean(axis=0)).ravel()
+
+
+def tilt_push_response(series: Sequence[tuple[np.ndarray, np.ndarray]]) -> TiltPush:
+    """The velocity error regressed on the push, flights pooled (``tilt_push_series``): a slope
+    of 1 is a push EKF2 misses entirely, 0 one it sees (or balances) at once."""
+    if not series:
+        raise BadInput("tilt push: no flight to measure")
+    p = np.concatenate([s[0] for s in series])
+    e = np.concatenate([s[1] for s in series])
+    pp, ee = float(np.dot(p, p)), float(np.dot(e, e))
+    if pp <= 0.0 or ee <= 0.0:
+        raise BadInput("tilt push: the tilt error or the velocity error never changed")
+    pe = float(np.dot(p, e))
+    return TiltPush(slope=pe / pp, correlation=pe / float(np.sqrt(pp * ee)), samples=len(p))
