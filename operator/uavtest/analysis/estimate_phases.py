@@ -26,7 +26,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import lfilter
 
+from uavtest.analysis.attitude_response import body_z_from_quaternion
+from uavtest.analysis.fidelity import body_frame_series
 from uavtest.errors import BadInput
 
 __all__ = [
@@ -97,11 +100,7 @@ def body_errors_by_speed(
     acceleration (0.5 s mean) stays below ``STEADY_ACC``."""
     g = _grid(window, "body errors by speed")
     vx, vy = np.interp(g, t_truth, truth[:, 0]), np.interp(g, t_truth, truth[:, 1])
-    ex = np.interp(g, t, estimate[:, 0]) - vx
-    ey = np.interp(g, t, estimate[:, 1]) - vy
-    psi = np.interp(g, t, np.unwrap(estimate[:, 2]))
-    c, s = np.cos(psi), np.sin(psi)
-    fore, side = c * ex + s * ey, -s * ex + c * ey
+    fore, side = body_frame_series(g, t, estimate, t_truth, truth)
     k = max(1, round(0.5 * RATE))
     ax = np.convolve(np.gradient(vx, g), np.ones(k) / k, "same")
     ay = np.convolve(np.gradient(vy, g), np.ones(k) / k, "same")
@@ -127,13 +126,6 @@ def climb_wander(
     return float(np.mean(np.hypot(np.interp(g, t, x) - x0, np.interp(g, t, y) - y0)))
 
 
-def _body_z(q: np.ndarray) -> np.ndarray:
-    """(N, 2): the horizontal (north, east) components of the body z axis of (N, 4) w, x, y, z
-    quaternions (body to NED)."""
-    w, a, b, c = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    return np.column_stack([2.0 * (a * c + w * b), 2.0 * (b * c - w * a)])
-
-
 def tilt_push_series(
     t: np.ndarray,
     velocity: np.ndarray,
@@ -154,11 +146,12 @@ def tilt_push_series(
     g = _grid(window, "tilt push")
     est = np.column_stack([np.interp(g, t_att, q[:, i]) for i in range(4)])
     tru = np.column_stack([np.interp(g, t_att_truth, q_truth[:, i]) for i in range(4)])
-    offset = _body_z(est) - _body_z(tru)
+    offset = body_z_from_quaternion(est) - body_z_from_quaternion(tru)
+    # push[i] = a push[i-1] - g offset[i] / RATE, push[0] = 0: at rest at the window's start
     a = np.exp(-1.0 / (RATE * PUSH_TAU))
-    push = np.zeros_like(offset)
-    for i in range(1, len(g)):
-        push[i] = a * push[i - 1] - GRAVITY * offset[i] / RATE
+    drive = offset.copy()
+    drive[0] = 0.0
+    push = lfilter([-GRAVITY / RATE], [1.0, -a], drive, axis=0)
     vt = np.column_stack([np.interp(g, t_truth, truth_velocity[:, i]) for i in range(2)])
     err = np.column_stack([np.interp(g, t, velocity[:, i]) for i in range(2)]) - vt
     slow = np.hypot(vt[:, 0], vt[:, 1]) < SLOW_SPEED

@@ -58,6 +58,7 @@ __all__ = [
     "altitude_drift",
     "arrival_velocity_errors",
     "body_frame_errors",
+    "body_frame_series",
     "boot_time_correlation",
     "braking_velocity_errors",
     "compare",
@@ -311,13 +312,19 @@ def body_frame_errors(
     y), each about its mean. ``estimate``: (N, 3) vx, vy (NED), heading (rad), as
     ``vehicle_local_position`` logs them; ``truth``: (M, 2) vx, vy. PX4 SIH's accelerometer noise
     is 0.5 / 1.7 m/s^2 on the body's x / y axis (``sih.cpp``), and EKF2's velocity error follows it."""
-    g = _grid(window, rate, "body-frame errors")
+    fore, side = body_frame_series(_grid(window, rate, "body-frame errors"), t, estimate, t_truth, truth)
+    return float(fore.std()), float(side.std())
+
+
+def body_frame_series(
+    g: np.ndarray, t: np.ndarray, estimate: np.ndarray, t_truth: np.ndarray, truth: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The estimated horizontal velocity's error against the truth on the times ``g``, fore-aft
+    and sideways in the body frame of the estimated heading (``body_frame_errors``' inputs)."""
     e = _errors_on(g, t, estimate, t_truth, truth, 2)
     psi = np.interp(g, t, np.unwrap(estimate[:, 2]))
     c, s = np.cos(psi), np.sin(psi)
-    fore = c * e[:, 0] + s * e[:, 1]
-    side = -s * e[:, 0] + c * e[:, 1]
-    return float(fore.std()), float(side.std())
+    return c * e[:, 0] + s * e[:, 1], -s * e[:, 0] + c * e[:, 1]
 
 
 def boot_time_correlation(series: Sequence[tuple[np.ndarray, np.ndarray]], lag: float = 2.0) -> float:
