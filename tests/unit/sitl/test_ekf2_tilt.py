@@ -8,7 +8,9 @@ import math
 import random
 
 import numpy as np
+import pytest
 
+from uavtest.sitl import ekf2
 from uavtest.sitl.ekf2 import TILT_SIGMA_AIR, Estimator
 from uavtest.sitl.simulator_sih import GRAVITY, Body
 
@@ -65,3 +67,50 @@ def test_the_air_process_keeps_pxs_spread() -> None:
         e.update_tilt(0.02, True, True)
         xs.append(e.tx)
     assert 0.8 * TILT_SIGMA_AIR < float(np.std(xs)) < 1.2 * TILT_SIGMA_AIR
+
+
+def _hover_position_error(monkeypatch: pytest.MonkeyPatch, share: float) -> float:
+    """The horizontal position error's mean magnitude (m) of estimators hovering for a minute."""
+    monkeypatch.setattr(ekf2, "TILT_POSITION_SHARE", share)
+    mags = []
+    for seed in range(40):
+        e = Estimator(random.Random(seed), rng_tilt=random.Random(f"{seed}:tilt"))
+        for i in range(50 * 60):
+            e.update_tilt(0.02, True, True)
+            e.update(0.02)
+            if i >= 500:
+                mags.append(math.hypot(e.ex, e.ey))
+    return float(np.mean(mags))
+
+
+def test_the_position_follows_part_of_the_push_as_px4s_does(monkeypatch: pytest.MonkeyPatch) -> None:
+    """PX4 v1.15 SIH's position error in a hover: 0.29-0.33 m (mean magnitude, 24 flights of the
+    competition missions against their ground truth); the push in the velocity alone left the
+    built-in's at 0.20."""
+    share = ekf2.TILT_POSITION_SHARE
+    assert 0.22 < _hover_position_error(monkeypatch, share) < 0.4
+    assert _hover_position_error(monkeypatch, 0.0) < 0.2
+
+
+def test_part_of_the_takeoffs_slide_stays_in_the_position(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The push of the tilt error carried off the ground is kept out of the position in part: PX4's
+    estimate sees part of the takeoff's slide (its takeoffs turn back to the track's start)."""
+
+    def drift(kept_out: float) -> float:
+        monkeypatch.setattr(ekf2, "TILT_LIFTOFF_KEPT_OUT", kept_out)
+        out = []
+        for seed in range(40):
+            e = Estimator(random.Random(seed), rng_tilt=random.Random(f"{seed}:tilt"))
+            for _ in range(int(4.5 * 50)):  # armed on the ground: the error grows
+                e.update_tilt(0.02, True, False)
+                e.update(0.02)
+            ex0, ey0 = e.ex, e.ey
+            for _ in range(3 * 50):  # the first 3 s in the air
+                e.update_tilt(0.02, True, True)
+                e.update(0.02)
+            out.append(math.hypot(e.ex - ex0, e.ey - ey0))
+        return float(np.median(out))
+
+    share = ekf2.TILT_LIFTOFF_KEPT_OUT
+    assert 0.0 < share < 1.0
+    assert drift(1.0) < drift(share) < drift(0.0)
