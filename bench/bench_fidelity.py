@@ -52,9 +52,11 @@ from uavtest.analysis.attitude_response import (
 from uavtest.analysis.attitude_response import fit as fit_attitude_response
 from uavtest.analysis.estimate_phases import (
     CLIMB_AFTER,
+    PositionErrors,
     SpeedErrors,
     body_errors_by_speed,
     climb_wander,
+    position_errors_by_phase,
     tilt_push_response,
     tilt_push_series,
 )
@@ -205,6 +207,8 @@ class Flights:
     stalls: list[bool] = dataclasses.field(default_factory=list)
     #: per flight with ground truth: EKF2's velocity error at rest and at cruise (body frame)
     speed_errors: list[SpeedErrors] = dataclasses.field(default_factory=list)
+    #: per flight with ground truth: EKF2's position error across the track and at rest
+    position_errors: list[PositionErrors] = dataclasses.field(default_factory=list)
     #: per flight: the estimate's horizontal wander in the climb (``climb_wander``), m
     wander: list[float] = dataclasses.field(default_factory=list)
     #: per flight with attitude ground truth: (push, velocity error) at low speed
@@ -290,6 +294,9 @@ def _measure(ulog: ULog, into: Flights) -> None:
         into.speed_errors.append(
             body_errors_by_speed(t, velocity, gt["timestamp"] / 1e6, truth[:, 2:], inside)
         )
+        into.position_errors.append(
+            position_errors_by_phase(t, estimate[:, :2], gt["timestamp"] / 1e6, truth, inside)
+        )
         if any(d.name == "vehicle_attitude_groundtruth" for d in ulog.data_list):
             ag = ulog.get_dataset("vehicle_attitude_groundtruth").data
             at = ulog.get_dataset("vehicle_attitude").data
@@ -354,6 +361,16 @@ def _speed_errors(errors: list[SpeedErrors]) -> str:
 
     rest = f"{mean('rest_fore'):.2f} / {mean('rest_side'):.2f}"
     return f"{rest} → {mean('cruise_fore'):.2f} / {mean('cruise_side'):.2f}"
+
+
+def _position_errors(errors: list[PositionErrors]) -> str:
+    """Across the track; at rest: the mean over flights that have samples."""
+
+    def mean(attr: str) -> float:
+        values = [getattr(e, attr) for e in errors if np.isfinite(getattr(e, attr))]
+        return float(np.mean(values)) if values else float("nan")
+
+    return f"{mean('across'):.2f}; {mean('rest'):.2f}"
 
 
 def _wander(wander: list[float]) -> str:
@@ -524,6 +541,15 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "(< 0.5 m/s) → at a steady cruise (> 4.2 m/s)",
             _speed_errors(px4_all.speed_errors),
             _speed_errors(ours_all.speed_errors),
+            "",
+            "",
+        )
+    if px4_all.position_errors and ours_all.position_errors:
+        t.add_row(
+            "EKF2 position error against the truth, mean magnitude, m: across the track on a leg "
+            "(> 3.5 m/s); at rest in the air (< 0.5 m/s)",
+            _position_errors(px4_all.position_errors),
+            _position_errors(ours_all.position_errors),
             "",
             "",
         )

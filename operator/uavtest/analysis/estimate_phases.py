@@ -13,6 +13,11 @@ v1.15 SIH's flights and the built-in vehicle's side by side.
   velocity error its position does not follow. A first leg that starts more than the acceptance
   radius off its track goes "offtrack" (FlightTaskAuto) and brakes early. 24 PX4 SIH flights,
   8-10 s after lift-off: 0.20 m median, 0.37 p90; the built-in vehicle 0.23-0.29, 0.53 (stop 38).
+- ``position_errors_by_phase``: the estimated position's error against the truth, mean magnitude,
+  across the track on a leg (true speed above ``LEG_SPEED``: the along-track part is mostly
+  the GPS lead) and at rest in the air. PX4's position follows part of its tilt push: 24 PX4 SIH
+  flights, 0.24-0.29 m across, 0.30-0.34 at rest; the built-in vehicle 0.14-0.15 and 0.18
+  before stop 39, 0.20-0.21 and 0.26-0.27 since.
 - ``tilt_push_response``: at low speed, the velocity error against the leaky integral (1 s) of
   g x the tilt error (the estimated body z axis's horizontal offset from the true one): its
   least-squares slope and correlation. The attitude controller levels the estimated body, so the
@@ -35,12 +40,15 @@ from uavtest.errors import BadInput
 __all__ = [
     "CLIMB_AFTER",
     "CRUISE_SPEED",
+    "LEG_SPEED",
     "REST_SPEED",
     "SLOW_SPEED",
+    "PositionErrors",
     "SpeedErrors",
     "TiltPush",
     "body_errors_by_speed",
     "climb_wander",
+    "position_errors_by_phase",
     "tilt_push_response",
     "tilt_push_series",
 ]
@@ -48,6 +56,7 @@ __all__ = [
 GRAVITY = 9.80665  # m/s^2
 REST_SPEED = 0.5  # m/s: below this the vehicle is at rest (hovering, climbing, descending)
 CRUISE_SPEED = 4.2  # m/s: above this, and not accelerating, it cruises
+LEG_SPEED = 3.5  # m/s: above this it flies a leg (``position_errors_by_phase``)
 STEADY_ACC = 0.5  # m/s^2: the true horizontal acceleration (0.5 s mean) below which it is steady
 SLOW_SPEED = 1.0  # m/s: ``tilt_push_response`` looks below this speed
 CLIMB_AFTER = 5.0  # s after lift-off: the takeoff's slide is over, the climb goes on
@@ -64,6 +73,15 @@ class SpeedErrors:
     rest_side: float
     cruise_fore: float
     cruise_side: float
+
+
+@dataclass(frozen=True, slots=True)
+class PositionErrors:
+    """One flight's position error (m, mean magnitude) across the track on a leg and at rest in the
+    air; NaN where it has fewer than ``min_samples`` samples (``position_errors_by_phase``)."""
+
+    across: float
+    rest: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,6 +130,36 @@ def body_errors_by_speed(
         rest_side=_rms(side[rest], min_samples),
         cruise_fore=_rms(fore[cruise], min_samples),
         cruise_side=_rms(side[cruise], min_samples),
+    )
+
+
+def _mean_abs(x: np.ndarray, min_samples: int) -> float:
+    return float(np.mean(np.abs(x))) if len(x) >= min_samples else float("nan")
+
+
+def position_errors_by_phase(
+    t: np.ndarray,
+    estimate: np.ndarray,
+    t_truth: np.ndarray,
+    truth: np.ndarray,
+    window: tuple[float, float],
+    min_samples: int = 40,
+) -> PositionErrors:
+    """``estimate``: (N, 2) x, y (NED) as ``vehicle_local_position`` logs them; ``truth``: (M, 4)
+    true x, y, vx, vy; ``window``: the seconds to look at (in the air). Across the track: the
+    error's component across the true velocity where the true speed is above ``LEG_SPEED``; at
+    rest: its magnitude where the true speed is below ``REST_SPEED``."""
+    g = _grid(window, "position errors by phase")
+    ex = np.interp(g, t, estimate[:, 0]) - np.interp(g, t_truth, truth[:, 0])
+    ey = np.interp(g, t, estimate[:, 1]) - np.interp(g, t_truth, truth[:, 1])
+    vx, vy = np.interp(g, t_truth, truth[:, 2]), np.interp(g, t_truth, truth[:, 3])
+    speed = np.hypot(vx, vy)
+    leg = speed > LEG_SPEED
+    across = (ey[leg] * vx[leg] - ex[leg] * vy[leg]) / speed[leg]
+    rest = speed < REST_SPEED
+    return PositionErrors(
+        across=_mean_abs(across, min_samples),
+        rest=_mean_abs(np.hypot(ex[rest], ey[rest]), min_samples),
     )
 
 

@@ -275,9 +275,9 @@ TILT_SMOOTH_S = 0.5  # s
 #: a leg is 0.24-0.29 m (mean magnitude; the built-in vehicle's, the push in the velocity only,
 #: 0.11-0.16), and in the climb the estimate stays near its lift-off point while the truth wanders
 #: (the estimate's distance from it, median 0.30-0.34 m, p90 0.51-0.55; the built-in's 0.55 / 0.96).
-#: In a hover PX4's position error is 0.29-0.33 m (mean magnitude; the built-in's 0.19-0.21). This
+#: At rest in the air PX4's position error is 0.30-0.34 m (mean magnitude; the built-in's 0.18). This
 #: share of the push is integrated into ``ex``, ``ey`` (with the leak ``TAU``): at 0.5 the built-in's
-#: cross-track error is 0.19-0.20 m, in a hover 0.26-0.28, the climb wander 0.47 / 0.77; at 1.0 the
+#: cross-track error is 0.20-0.21 m, at rest 0.26-0.27, the climb wander 0.47 / 0.77; at 1.0 the
 #: flights were 1-3 s faster than PX4's and braked mid-leg half as often (2026-11-28, stop 39)
 TILT_POSITION_SHARE = 0.5
 #: of the push the tilt error carried off the ground makes (its decay from lift-off, no new noise

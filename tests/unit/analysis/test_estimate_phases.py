@@ -13,6 +13,7 @@ from uavtest.analysis.estimate_phases import (
     RATE,
     body_errors_by_speed,
     climb_wander,
+    position_errors_by_phase,
     tilt_push_response,
     tilt_push_series,
 )
@@ -52,6 +53,24 @@ def test_a_flight_that_never_cruises_has_no_cruise_figure():
     assert math.isnan(e.cruise_fore) and math.isnan(e.cruise_side)
     with pytest.raises(BadInput, match="shorter than a second"):
         body_errors_by_speed(t, est, t, truth, (3.0, 3.5))
+
+
+def test_the_position_error_is_told_apart_across_a_leg_and_at_rest():
+    """A hover 0.30 m off (north-east), then a leg east at 5 m/s: 0.25 m off across it (north) and
+    0.5 m ahead along it (the GPS lead, which the across-track figure leaves out)."""
+    t = np.arange(0.0, 45.0, 0.01)
+    speed = np.clip((t - 20.0) / 5.0, 0.0, 1.0) * 5.0
+    east = np.cumsum(speed) * 0.01
+    truth = np.column_stack([np.zeros_like(t), east, np.zeros_like(t), speed])
+    off = np.where(t < 20.5, 0.30 / math.sqrt(2), 0.0)  # at rest: below 0.5 m/s
+    est = np.column_stack([off + np.where(t >= 20.5, 0.25, 0.0), east + off + np.where(t >= 20.5, 0.5, 0.0)])
+    e = position_errors_by_phase(t, est, t, truth, (1.0, 44.0))
+    assert e.rest == pytest.approx(0.30, abs=0.01)
+    assert e.across == pytest.approx(0.25, abs=0.01)
+    hover = position_errors_by_phase(t, est, t, truth, (1.0, 19.0))
+    assert math.isnan(hover.across) and hover.rest == pytest.approx(0.30, abs=0.01)
+    with pytest.raises(BadInput, match="position errors by phase"):
+        position_errors_by_phase(t, est, t, truth, (3.0, 3.5))
 
 
 def test_the_climb_wander_is_the_mean_distance_from_the_liftoff_point():
