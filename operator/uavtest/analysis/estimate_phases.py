@@ -34,7 +34,7 @@ import numpy as np
 from scipy.signal import lfilter
 
 from uavtest.analysis.attitude_response import body_z_from_quaternion
-from uavtest.analysis.fidelity import body_frame_series
+from uavtest.analysis.fidelity import body_frame_series, errors_on
 from uavtest.errors import BadInput
 
 __all__ = [
@@ -150,8 +150,7 @@ def position_errors_by_phase(
     error's component across the true velocity where the true speed is above ``LEG_SPEED``; at
     rest: its magnitude where the true speed is below ``REST_SPEED``."""
     g = _grid(window, "position errors by phase")
-    ex = np.interp(g, t, estimate[:, 0]) - np.interp(g, t_truth, truth[:, 0])
-    ey = np.interp(g, t, estimate[:, 1]) - np.interp(g, t_truth, truth[:, 1])
+    ex, ey = errors_on(g, t, estimate, t_truth, truth, 2).T
     vx, vy = np.interp(g, t_truth, truth[:, 2]), np.interp(g, t_truth, truth[:, 3])
     speed = np.hypot(vx, vy)
     leg = speed > LEG_SPEED
@@ -201,7 +200,7 @@ def tilt_push_series(
     drive[0] = 0.0
     push = lfilter([-GRAVITY / RATE], [1.0, -a], drive, axis=0)
     vt = np.column_stack([np.interp(g, t_truth, truth_velocity[:, i]) for i in range(2)])
-    err = np.column_stack([np.interp(g, t, velocity[:, i]) for i in range(2)]) - vt
+    err = errors_on(g, t, velocity, t_truth, truth_velocity, 2)
     slow = np.hypot(vt[:, 0], vt[:, 1]) < SLOW_SPEED
     if slow.sum() < 2 * RATE:
         raise BadInput("tilt push: the vehicle was slower than 1 m/s for less than 2 s")

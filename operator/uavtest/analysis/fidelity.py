@@ -64,6 +64,7 @@ __all__ = [
     "compare",
     "displacement_errors",
     "displacement_grid",
+    "errors_on",
     "estimate_errors",
     "flight_figures",
     "from_liftoff",
@@ -191,7 +192,7 @@ def estimate_errors(
     position error (about its mean: the EKF origin is not the simulator's) and of the velocity
     error, averaged over x and y. ``estimate`` and ``truth``: (N, 4) columns x, y, vx, vy."""
     g = _grid(window, rate, "estimate errors")
-    std = _errors_on(g, t, estimate, t_truth, truth, 4).std(axis=0)
+    std = errors_on(g, t, estimate, t_truth, truth, 4).std(axis=0)
     return float((std[0] + std[1]) / 2), float((std[2] + std[3]) / 2)
 
 
@@ -214,7 +215,7 @@ def vertical_estimate_errors(
     window, the ground (touchdown and EKF2's shift on the ground left out).
     ``estimate``, ``truth``: (N, 2) columns z, vz."""
     g = _grid(window, rate, "vertical estimate errors")
-    e = _errors_on(g, t, estimate, t_truth, truth, 2)
+    e = errors_on(g, t, estimate, t_truth, truth, 2)
     n = max(1, int(VERTICAL_TREND_S * rate))
     if len(g) <= n:
         raise BadInput("vertical estimate errors: the window is shorter than the trend", value=len(g) / rate)
@@ -240,7 +241,7 @@ def altitude_drift(
     ``VERTICAL_AIRBORNE`` above its lowest point in the window. The controller flies the estimate,
     so this is how far the vehicle truly strays above and below the altitude it holds."""
     g = _grid(window, rate, "altitude drift")
-    e = _errors_on(g, t, z[:, None], t_truth, z_truth[:, None], 1)[:, 0]
+    e = errors_on(g, t, z[:, None], t_truth, z_truth[:, None], 1)[:, 0]
     return float(e[_flying(g, t_truth, z_truth, "altitude drift")].std())
 
 
@@ -262,7 +263,7 @@ def _grid(window: tuple[float, float], rate: float, what: str) -> np.ndarray:
     return g
 
 
-def _errors_on(
+def errors_on(
     g: np.ndarray, t: np.ndarray, estimate: np.ndarray, t_truth: np.ndarray, truth: np.ndarray, n: int
 ) -> np.ndarray:
     """The estimate's first ``n`` columns minus the truth's, both interpolated onto ``g``."""
@@ -290,7 +291,7 @@ def estimate_lead(
     k = round(span * rate)
     if len(g) <= k:
         raise BadInput("estimate lead: the window is shorter than the span")
-    err = _errors_on(g, t, estimate, t_truth, truth, 2)
+    err = errors_on(g, t, estimate, t_truth, truth, 2)
     vel = np.column_stack([np.interp(g, t_truth, truth[:, 2 + i]) for i in range(2)])
     d_e, d_v = (err[k:] - err[:-k]).ravel(), (vel[k:] - vel[:-k]).ravel()
     moved = np.abs(d_v) > 0.5
@@ -321,7 +322,7 @@ def body_frame_series(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The estimated horizontal velocity's error against the truth on the times ``g``, fore-aft
     and sideways in the body frame of the estimated heading (``body_frame_errors``' inputs)."""
-    e = _errors_on(g, t, estimate, t_truth, truth, 2)
+    e = errors_on(g, t, estimate, t_truth, truth, 2)
     psi = np.interp(g, t, np.unwrap(estimate[:, 2]))
     c, s = np.cos(psi), np.sin(psi)
     return c * e[:, 0] + s * e[:, 1], -s * e[:, 0] + c * e[:, 1]
@@ -445,7 +446,7 @@ def braking_velocity_errors(
         along = leg / length
         right = np.array([-along[1], along[0]])
         g = np.arange(accepted + window[0], accepted + window[1], 1.0 / rate)
-        err = _errors_on(g, t, estimate[:, 2:], t_truth, truth, 2)
+        err = errors_on(g, t, estimate[:, 2:], t_truth, truth, 2)
         out.append((float((err @ along).mean()), float((err @ right).mean())))
     return out
 
