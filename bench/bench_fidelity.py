@@ -352,25 +352,21 @@ def _brakes(brakes: list[MidLegBrakes]) -> str:
     return f"{len(to_go)} in {legs} legs; {where}{when}"
 
 
+def _finite_mean(flights: list, attr: str) -> float:
+    """The mean of ``attr`` over the flights that have samples for it (not NaN)."""
+    values = [getattr(f, attr) for f in flights if np.isfinite(getattr(f, attr))]
+    return float(np.mean(values)) if values else float("nan")
+
+
 def _speed_errors(errors: list[SpeedErrors]) -> str:
     """Fore-aft / sideways rms at rest, then at cruise: the mean over flights that have samples."""
-
-    def mean(attr: str) -> float:
-        values = [getattr(e, attr) for e in errors if np.isfinite(getattr(e, attr))]
-        return float(np.mean(values)) if values else float("nan")
-
-    rest = f"{mean('rest_fore'):.2f} / {mean('rest_side'):.2f}"
-    return f"{rest} → {mean('cruise_fore'):.2f} / {mean('cruise_side'):.2f}"
+    rest = f"{_finite_mean(errors, 'rest_fore'):.2f} / {_finite_mean(errors, 'rest_side'):.2f}"
+    return f"{rest} → {_finite_mean(errors, 'cruise_fore'):.2f} / {_finite_mean(errors, 'cruise_side'):.2f}"
 
 
 def _position_errors(errors: list[PositionErrors]) -> str:
     """Across the track; at rest: the mean over flights that have samples."""
-
-    def mean(attr: str) -> float:
-        values = [getattr(e, attr) for e in errors if np.isfinite(getattr(e, attr))]
-        return float(np.mean(values)) if values else float("nan")
-
-    return f"{mean('across'):.2f}; {mean('rest'):.2f}"
+    return f"{_finite_mean(errors, 'across'):.2f}; {_finite_mean(errors, 'rest'):.2f}"
 
 
 def _wander(wander: list[float]) -> str:
