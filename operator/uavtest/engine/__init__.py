@@ -8,17 +8,21 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from uavtest.engine.command import run_command
-
 if TYPE_CHECKING:
     from uavtest.engine.aggregate import aggregate_run
+    from uavtest.engine.command import run_command
 
 __all__ = ["aggregate_run", "run_command"]
 
 
 def __getattr__(name: str) -> Any:
+    """On first use (PEP 562): a replica process (``uavtest.engine.entry``) imports neither."""
     if name == "aggregate_run":
         from uavtest.engine.aggregate import aggregate_run
 
         return aggregate_run
+    if name == "run_command":
+        from uavtest.engine.command import run_command
+
+        return run_command
     raise AttributeError(f"module 'uavtest.engine' has no attribute {name!r}")

@@ -9,7 +9,9 @@ error), never a traceback.
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import os
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -151,8 +153,32 @@ app.command()(sitl)
 
 
 def main() -> None:
-    """Entry point: run the command, translate known errors to a message and an exit code."""
-    run_at_boundary(lambda: app(standalone_mode=True), lambda text: print(text, file=sys.stderr))
+    """Entry point: run the command, translate known errors to a message and an exit code.
+
+    The process then ends without the interpreter's teardown (numpy, pydantic, pymavlink: tens of
+    milliseconds on a replica's clock): by then the command has closed its files and stored or
+    printed its result, and only the standard streams and the log handlers are left to flush.
+    """
+    try:
+        run_at_boundary(lambda: app(standalone_mode=True), lambda text: print(text, file=sys.stderr))
+        code = 0
+    except SystemExit as e:
+        code = _exit_status(e.code)
+    logging.shutdown()
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):
+            stream.flush()
+    os._exit(code)
+
+
+def _exit_status(code: object) -> int:
+    """``sys.exit``'s argument as the process's status: None 0, a message 1 (printed), else int."""
+    if code is None:
+        return 0
+    if isinstance(code, int):
+        return code
+    print(code, file=sys.stderr)
+    return 1
 
 
 if __name__ == "__main__":

@@ -13,6 +13,22 @@ finished logs over MAVLink);
 ``inprocess.fly_mission`` flies a mission without sockets.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 __all__ = ["SimConfig", "Vehicle"]
 
-from uavtest.sitl.vehicle import SimConfig, Vehicle
+if TYPE_CHECKING:
+    from uavtest.sitl.vehicle import SimConfig, Vehicle
+
+
+def __getattr__(name: str) -> Any:
+    """``SimConfig`` and ``Vehicle`` on first use (PEP 562): a process that needs one module of the
+    simulator (the runner's range sensor needs ``sensor_obstacle_distance_sim``) does not import
+    the whole vehicle at start-up."""
+    if name in __all__:
+        from uavtest.sitl import vehicle
+
+        return getattr(vehicle, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import time
@@ -38,6 +39,9 @@ def test_exit_codes_and_output_files_match_exec(
     )
     assert bad.wait(timeout=60) == 2
     assert "absent.yaml" in err.read_text()
+    # the process ends without the interpreter's teardown: its last line still reaches stdout
+    last = json.loads(out.read_text().splitlines()[-1])
+    assert last["verdict"] == "error" and "absent.yaml" in last["reason"]
 
 
 def test_a_forked_simulator_is_stopped_cleanly(warm: WarmLauncher, tmp_path: Path) -> None:
@@ -82,3 +86,15 @@ def test_the_engine_does_not_import_the_cli() -> None:
         "sys.exit('uavtest.cli' in sys.modules)"
     )
     assert subprocess.run([sys.executable, "-c", code], check=False).returncode == 0
+
+
+def test_a_runner_starts_without_the_simulator_or_the_console() -> None:
+    """Start-up is on every replica's clock: the runner's process imports neither the built-in
+    vehicle (only its range sensor's scan) nor rich (the user's console, not a replica's)."""
+    code = (
+        "import sys, uavtest.engine.entry, uavtest.runner.main;"
+        "heavy = [m for m in ('uavtest.sitl.vehicle', 'rich', 'uavtest.engine.command') if m in sys.modules];"
+        "print(heavy); sys.exit(bool(heavy))"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
