@@ -487,9 +487,9 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
         "—" if len(px4) < 2 else ("yes" if ft_inside else "[red]no[/red]"),
     )
     t.add_row(
-        "flight-time spread (max − min), s",
-        f"{ft_px4.high - ft_px4.low:.1f}",
-        f"{ft_ours.high - ft_ours.low:.1f}",
+        "flight-time spread: standard deviation (max − min), s",
+        f"{ft_px4.std:.1f} ({ft_px4.high - ft_px4.low:.1f})",
+        f"{ft_ours.std:.1f} ({ft_ours.high - ft_ours.low:.1f})",
         "",
         "",
     )

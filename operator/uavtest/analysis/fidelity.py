@@ -494,12 +494,16 @@ def pairs_between(ours: Sequence[FlightFigures], theirs: Sequence[FlightFigures]
 
 @dataclass(frozen=True, slots=True)
 class Spread:
-    """Mean, minimum and maximum of one figure over flights or pairs."""
+    """Mean, minimum, maximum and standard deviation of one figure over flights or pairs.
+
+    ``std`` is the sample standard deviation (0 for one value): unlike the range, it does not grow
+    with the number of flights, so 25 built-in flights and 12 PX4 flights compare on it."""
 
     mean: float
     low: float
     high: float
     n: int
+    std: float = 0.0
 
     def __str__(self) -> str:
         return f"{self.mean:.2f} ({self.low:.2f}–{self.high:.2f})"
@@ -510,8 +514,9 @@ class Spread:
 
 
 def spread(values: Sequence[float]) -> Spread:
-    """Mean and range of ``values``; BadInput when there are none."""
+    """Mean, range and standard deviation of ``values``; BadInput when there are none."""
     if not len(values):
         raise BadInput("no values to summarise: at least one flight or pair is needed")
     arr = np.asarray(values, dtype=np.float64)
-    return Spread(float(arr.mean()), float(arr.min()), float(arr.max()), len(arr))
+    std = float(arr.std(ddof=1)) if len(arr) > 1 else 0.0
+    return Spread(float(arr.mean()), float(arr.min()), float(arr.max()), len(arr), std)

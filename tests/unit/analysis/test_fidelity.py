@@ -100,6 +100,9 @@ def test_pairs_and_spread():
     s = spread([1.0, 2.0, 4.0])
     assert (s.mean, s.low, s.high, s.n) == (pytest.approx(7 / 3), 1.0, 4.0, 3)
     assert s.inside(spread([0.5, 2.5])) and not s.inside(spread([0.5, 2.0]))
+    # the sample standard deviation: comparable between 25 flights and 12, unlike the range
+    assert s.std == pytest.approx(float(np.std([1.0, 2.0, 4.0], ddof=1)))
+    assert spread([3.0]).std == 0.0
     with pytest.raises(BadInput):
         spread([])
 
