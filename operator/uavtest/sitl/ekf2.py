@@ -90,8 +90,10 @@ accelerometer measures by its heading, so a heading error turns the braking into
 velocity the estimate does not see; the controller does not fight it, the vehicle drifts off the
 new leg and FlightTaskAuto goes offtrack. Modelled as a leaky integral (``ACC_COUPLING_TAU``) of
 ``ACC_COUPLING`` of the true acceleration plus ``HEADING_COUPLING`` x ``eh`` x the acceleration
-turned 90 degrees, in ``evx``, ``evy`` only (not integrated into the position). Not in the local
-planner's system (``gazebo_system``), whose flights were calibrated without it.
+turned 90 degrees, in ``evx``, ``evy`` only (not integrated into the position), the acceleration
+bounded (``ACC_COUPLING_MAX``): accelerating out of a corner at 2-3 m/s^2 PX4's miss is no larger
+than braking's, and gone within a second of the acceleration's end. Not in the local planner's
+system (``gazebo_system``), whose flights were calibrated without it.
 
 At touchdown the estimate moves on its own. SIH's downward range finder reads 0 on the ground,
 below its minimum, so EKF2 stops fusing it until the land detector says landed (then EKF2 fakes
@@ -220,10 +222,25 @@ VELOCITY_SMOOTH_S = 0.04  # s
 #: EKF2's velocity misses part of what the vehicle truly does when it accelerates, and GPS
 #: fusion takes it back (module docstring): a leaky integral (``ACC_COUPLING_TAU``) of
 #: ``ACC_COUPLING`` of the true horizontal acceleration, plus what the heading error ``eh`` turns
-#: it by (``HEADING_COUPLING`` x eh x the acceleration turned 90 degrees)
-ACC_COUPLING = 0.1
-ACC_COUPLING_TAU = 2.0  # s
-HEADING_COUPLING = 1.0
+#: it by (``HEADING_COUPLING`` x eh x the acceleration turned 90 degrees), the acceleration bounded
+#: in magnitude by ``ACC_COUPLING_MAX``. PX4 v1.15 SIH's miss does not grow with the acceleration:
+#: braking into a waypoint at about 0.85 m/s^2 it is -0.13 to -0.21 m/s along the leg, and
+#: accelerating out of one at 2-3 m/s^2 (40 legs of at least 40 m, 24 flights of the competition
+#: missions with their ground truth, stop 35) +0.19 m/s at most, 2 s into the leg, and gone by
+#: 3.5 s (0.03). Until stop 40 the integral leaked over 2 s, unbounded (0.1 of the acceleration,
+#: the heading's turn 1.0 x eh): out of a corner the whole velocity error along the leg reached
+#: 0.26 m/s and held 0.11 at 4 s, and across the leg 0.28-0.29 m/s rms 2-3 s in (PX4 0.16-0.21), so
+#: the estimate drifted off the new leg as its acceleration ended and FlightTaskAuto braked 5-6 s
+#: into 20 of 124 legs (PX4: 1 of 40). A faster leak with a larger share keeps the braking's miss
+#: (0.37 x 0.85 x 0.6 s = 0.19 m/s at steady braking; the heading's 3.3 x 0.6 s, as 1.0 x 2 s
+#: before); out of a corner the error along the leg is 0.12 / 0.06 / 0.03 m/s at 3 / 3.5 / 4 s
+#: (its peak, 0.27 at 2 s, is mostly other parts), across it 0.23-0.24 rms, and 12 of 125 legs
+#: brake within 6.5 s. Bounded at 0.7 m/s^2, the square's braking from 8 m/s
+#: (``square-mission.ulg``: -0.26 m/s) came out 0.105 m/s short of PX4's
+ACC_COUPLING = 0.37
+ACC_COUPLING_TAU = 0.6  # s
+HEADING_COUPLING = 3.3
+ACC_COUPLING_MAX = 0.9  # m/s^2
 #: EKF2's altitude drifts against the truth by decimetres within a flight (EKF2_HGT_REF GNSS: SIH's
 #: GNSS altitude carries 0.5 m of white noise at 8 Hz, its accelerometer 1.4 m/s^2 vertically): in
 #: 40 PX4 v1.15 SIH flights flown here (the competition missions, the square, Surrealist's m0;
@@ -636,8 +653,12 @@ class Estimator:
         if self.acc_coupled:
             au = math.exp(-dt / ACC_COUPLING_TAU)
             k = HEADING_COUPLING * self.eh
-            self._ux = au * self._ux + (ACC_COUPLING * ax - k * ay) * dt
-            self._uy = au * self._uy + (ACC_COUPLING * ay + k * ax) * dt
+            cx, cy = ax, ay
+            a = math.hypot(ax, ay)
+            if a > ACC_COUPLING_MAX:
+                cx, cy = ax * ACC_COUPLING_MAX / a, ay * ACC_COUPLING_MAX / a
+            self._ux = au * self._ux + (ACC_COUPLING * cx - k * cy) * dt
+            self._uy = au * self._uy + (ACC_COUPLING * cy + k * cx) * dt
         px = TILT_POSITION_SHARE * (self._tvx - TILT_LIFTOFF_KEPT_OUT * self._lvx)
         py = TILT_POSITION_SHARE * (self._tvy - TILT_LIFTOFF_KEPT_OUT * self._lvy)
         self._exl = leak * self._exl + (self._cvx + px) * dt

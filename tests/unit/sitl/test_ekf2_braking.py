@@ -90,7 +90,8 @@ def test_braking_leaves_the_velocity_short_and_gps_fusion_takes_it_back() -> Non
         _brake(e, 4.0, 0.85, 4.0)  # PX4's braking into a competition waypoint
     short = coupled.evx - plain.evx
     tau = ekf2.ACC_COUPLING_TAU
-    expected = -ekf2.ACC_COUPLING * 0.85 * tau * (1 - math.exp(-4.0 / tau))
+    expected = -ekf2.ACC_COUPLING * min(0.85, ekf2.ACC_COUPLING_MAX) * tau * (1 - math.exp(-4.0 / tau))
+    assert -0.22 < expected < -0.12  # PX4 SIH braking into a competition waypoint: -0.13 to -0.21
     assert short == pytest.approx(expected, rel=0.05)
     assert coupled.ex == pytest.approx(plain.ex, abs=1e-9)  # the position does not follow it
     for e in (coupled, plain):
@@ -114,3 +115,30 @@ def test_the_local_planners_system_is_calibrated_without_it() -> None:
     e = Estimator(random.Random(1))
     e.gazebo_system()
     assert not e.acc_coupled
+
+
+def _accelerate(e: Estimator, seconds: float, acc: float, v0: float, dt: float = 0.02) -> float:
+    """Fly ``e`` north accelerating at ``acc`` from ``v0`` for ``seconds``; the true velocity then."""
+    v = v0
+    for _ in range(round(seconds / dt)):
+        v += acc * dt
+        e.update(dt, v, 0.0, 0.0)
+    return v
+
+
+def test_out_of_a_corner_the_miss_is_no_larger_than_brakings_and_soon_gone() -> None:
+    """PX4 v1.15 SIH accelerating out of a waypoint at 2-3 m/s^2 (40 legs, 24 flights with their
+    ground truth): EKF2's velocity error along the leg peaks at +0.19 m/s 2 s in, and is 0.03 by
+    3.5 s, 1 s after the acceleration ends. Before stop 40 the built-in's reached 0.26 and held
+    0.11 at 4 s, and its estimate drifted off the new leg as the acceleration ended."""
+    coupled, plain = _pair(0.0)
+    for e in (coupled, plain):
+        _brake(e, 10.0, 0.0, 0.0)  # at rest on the waypoint
+    v = 0.0
+    for e in (coupled, plain):
+        v = _accelerate(e, 2.0, 2.5, 0.0)  # MPC_ACC_HOR-like acceleration out of the corner
+    peak = coupled.evx - plain.evx
+    assert 0.1 < peak < 0.22, peak
+    for e in (coupled, plain):
+        _accelerate(e, 1.0, 0.0, v)  # at cruise speed: the acceleration is over
+    assert abs(coupled.evx - plain.evx) < 0.06, coupled.evx - plain.evx
