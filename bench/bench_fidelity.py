@@ -56,6 +56,8 @@ from uavtest.analysis.estimate_phases import (
     SpeedErrors,
     body_errors_by_speed,
     climb_wander,
+    heading_turn_response,
+    heading_turn_series,
     position_errors_by_phase,
     tilt_push_response,
     tilt_push_series,
@@ -213,6 +215,8 @@ class Flights:
     wander: list[float] = dataclasses.field(default_factory=list)
     #: per flight with attitude ground truth: (push, velocity error) at low speed
     push: list = dataclasses.field(default_factory=list)
+    #: per flight with attitude ground truth: (heading error x speed, sideways velocity error)
+    turn: list = dataclasses.field(default_factory=list)
     #: per flight: whether it finished its mission (``mission_result``); the others are counted
     #: here and measured nowhere else (a stalled or blocked flight has no path to compare)
     completed: list[bool] = dataclasses.field(default_factory=list)
@@ -313,6 +317,20 @@ def _measure(ulog: ULog, into: Flights) -> None:
                         ag["timestamp"] / 1e6,
                         quat[1],
                         (traj.t[0] + 6.0, traj.t[-1] - 3.0),
+                    )
+                )
+            with contextlib.suppress(BadInput):  # never steady above 2 m/s for 2 s
+                into.turn.append(
+                    heading_turn_series(
+                        t,
+                        estimate[:, 2:],
+                        gt["timestamp"] / 1e6,
+                        truth[:, 2:],
+                        at["timestamp"] / 1e6,
+                        quat[0],
+                        ag["timestamp"] / 1e6,
+                        quat[1],
+                        flown,
                     )
                 )
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
@@ -563,6 +581,16 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
         t.add_row(
             "velocity error against g x the tilt error, leaky over 1 s, below 1 m/s: slope "
             "(correlation); 1: EKF2 misses the push",
+            f"{theirs.slope:.2f} ({theirs.correlation:.2f})",
+            f"{mine.slope:.2f} ({mine.correlation:.2f})",
+            "",
+            "",
+        )
+    if px4_all.turn and ours_all.turn:
+        theirs, mine = heading_turn_response(px4_all.turn), heading_turn_response(ours_all.turn)
+        t.add_row(
+            "sideways velocity error against EKF2's heading error x speed, steady above 2 m/s: "
+            "slope (correlation); PX4's heading and velocity errors go together",
             f"{theirs.slope:.2f} ({theirs.correlation:.2f})",
             f"{mine.slope:.2f} ({mine.correlation:.2f})",
             "",

@@ -23,6 +23,13 @@ v1.15 SIH's flights and the built-in vehicle's side by side.
   least-squares slope and correlation. The attitude controller levels the estimated body, so the
   true thrust leans by the tilt error and EKF2 misses that push until GPS fusion takes it back.
   24 PX4 SIH flights: slope 0.86, correlation 0.62; the built-in vehicle 0.30, 0.24 (stop 38).
+- ``heading_turn_series`` / ``heading_turn_response``: in steady flight (faster than
+  ``TURN_SPEED``, not accelerating), the velocity error sideways (across the true velocity)
+  against EKF2's heading error times the true speed. In 64 PX4 v1.15 SIH flights of mission2's
+  plan under seven parameter sets and of mission1 and mission3 (stop 41) the slope is -0.26 to
+  -0.51 (correlation -0.23 to -0.46; -0.15 / -0.14 with a 3 m/s cruise): where EKF2's heading is
+  off, its velocity is off sideways the other way, more so the faster the vehicle flies. The
+  built-in vehicle draws the two independently (+0.06 to +0.16, -0.10 at 8 m/s).
 """
 
 from __future__ import annotations
@@ -44,10 +51,13 @@ __all__ = [
     "REST_SPEED",
     "SLOW_SPEED",
     "PositionErrors",
+    "Regression",
     "SpeedErrors",
     "TiltPush",
     "body_errors_by_speed",
     "climb_wander",
+    "heading_turn_response",
+    "heading_turn_series",
     "position_errors_by_phase",
     "tilt_push_response",
     "tilt_push_series",
@@ -61,6 +71,7 @@ STEADY_ACC = 0.5  # m/s^2: the true horizontal acceleration (0.5 s mean) below w
 SLOW_SPEED = 1.0  # m/s: ``tilt_push_response`` looks below this speed
 CLIMB_AFTER = 5.0  # s after lift-off: the takeoff's slide is over, the climb goes on
 PUSH_TAU = 1.0  # s: the leaky integral of g x the tilt error (``ekf2.TILT_VEL_TAU``)
+TURN_SPEED = 2.0  # m/s: ``heading_turn_series`` looks above this true speed
 RATE = 20.0  # Hz: every series is resampled onto this grid
 
 
@@ -85,12 +96,17 @@ class PositionErrors:
 
 
 @dataclass(frozen=True, slots=True)
-class TiltPush:
-    """The velocity error's least-squares response to g x the tilt error, leaky-integrated."""
+class Regression:
+    """A least-squares response, flights pooled: the slope of y on x, their correlation, and the
+    number of samples."""
 
     slope: float
     correlation: float
     samples: int
+
+
+#: the velocity error's response to g x the tilt error, leaky-integrated (``tilt_push_response``)
+TiltPush = Regression
 
 
 def _grid(window: tuple[float, float], what: str) -> np.ndarray:
@@ -208,15 +224,67 @@ def tilt_push_series(
     return (p - p.mean(axis=0)).ravel(), (e - e.mean(axis=0)).ravel()
 
 
-def tilt_push_response(series: Sequence[tuple[np.ndarray, np.ndarray]]) -> TiltPush:
+def _pooled(series: Sequence[tuple[np.ndarray, np.ndarray]], what: str, x_name: str) -> Regression:
+    """y regressed on x, every flight's samples together, about their pooled means."""
+    if not series:
+        raise BadInput(f"{what}: no flight to measure")
+    x = np.concatenate([s[0] for s in series])
+    y = np.concatenate([s[1] for s in series])
+    x, y = x - x.mean(), y - y.mean()
+    xx, yy = float(np.dot(x, x)), float(np.dot(y, y))
+    if xx <= 0.0 or yy <= 0.0:
+        raise BadInput(f"{what}: the {x_name} or the velocity error never changed")
+    xy = float(np.dot(x, y))
+    return Regression(slope=xy / xx, correlation=xy / float(np.sqrt(xx * yy)), samples=len(x))
+
+
+def tilt_push_response(series: Sequence[tuple[np.ndarray, np.ndarray]]) -> Regression:
     """The velocity error regressed on the push, flights pooled (``tilt_push_series``): a slope
     of 1 is a push EKF2 misses entirely, 0 one it sees (or balances) at once."""
-    if not series:
-        raise BadInput("tilt push: no flight to measure")
-    p = np.concatenate([s[0] for s in series])
-    e = np.concatenate([s[1] for s in series])
-    pp, ee = float(np.dot(p, p)), float(np.dot(e, e))
-    if pp <= 0.0 or ee <= 0.0:
-        raise BadInput("tilt push: the tilt error or the velocity error never changed")
-    pe = float(np.dot(p, e))
-    return TiltPush(slope=pe / pp, correlation=pe / float(np.sqrt(pp * ee)), samples=len(p))
+    return _pooled(series, "tilt push", "tilt error")
+
+
+def _yaw(q: np.ndarray) -> np.ndarray:
+    """The heading (rad) of attitudes (w, x, y, z), unwrapped."""
+    w, x, y, z = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
+    return np.unwrap(np.arctan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)))
+
+
+def heading_turn_series(
+    t: np.ndarray,
+    velocity: np.ndarray,
+    t_truth: np.ndarray,
+    truth_velocity: np.ndarray,
+    t_att: np.ndarray,
+    q: np.ndarray,
+    t_att_truth: np.ndarray,
+    q_truth: np.ndarray,
+    window: tuple[float, float],
+) -> tuple[np.ndarray, np.ndarray]:
+    """One flight's (heading error x true speed, sideways velocity error) samples where it flies
+    steadily within ``window``: faster than ``TURN_SPEED``, its true acceleration (0.5 s mean)
+    below ``STEADY_ACC``. ``velocity`` / ``truth_velocity``: (N, 2) / (M, 2) horizontal velocities
+    (NED); ``q`` / ``q_truth``: attitudes (w, x, y, z). The heading error is the estimate's minus
+    the truth's (rad); sideways is 90 degrees clockwise from the true velocity seen from above
+    (east of a vehicle flying north), the error the estimate's minus the truth's. A flight never
+    steady for 2 s raises ``BadInput``."""
+    g = _grid(window, "heading turn")
+    vt = np.column_stack([np.interp(g, t_truth, truth_velocity[:, i]) for i in range(2)])
+    speed = np.hypot(vt[:, 0], vt[:, 1])
+    k = max(1, round(0.5 * RATE))
+    acc = np.hypot(*(np.convolve(np.gradient(vt[:, i], g), np.ones(k) / k, "same") for i in range(2)))
+    steady = (speed > TURN_SPEED) & (acc < STEADY_ACC)
+    if steady.sum() < 2 * RATE:
+        raise BadInput("heading turn: the vehicle flew steadily faster than 2 m/s for less than 2 s")
+    err = errors_on(g, t, velocity, t_truth, truth_velocity, 2)[steady]
+    ux, uy = (vt[steady] / speed[steady, None]).T
+    side = -err[:, 0] * uy + err[:, 1] * ux
+    eh = np.interp(g, t_att, _yaw(q)) - np.interp(g, t_att_truth, _yaw(q_truth))
+    eh = np.angle(np.exp(1j * eh))[steady]
+    return eh * speed[steady], side
+
+
+def heading_turn_response(series: Sequence[tuple[np.ndarray, np.ndarray]]) -> Regression:
+    """The sideways velocity error regressed on heading error x speed, flights pooled
+    (``heading_turn_series``): its slope (s: m/s of error per rad x m/s) and correlation."""
+    return _pooled(series, "heading turn", "heading error")

@@ -13,6 +13,8 @@ from uavtest.analysis.estimate_phases import (
     RATE,
     body_errors_by_speed,
     climb_wander,
+    heading_turn_response,
+    heading_turn_series,
     position_errors_by_phase,
     tilt_push_response,
     tilt_push_series,
@@ -127,3 +129,43 @@ def test_a_flight_never_slow_has_no_tilt_push_to_measure():
         tilt_push_series(t, est, t, truth, t, q_est, t, q_true, (2.0, 29.0))
     with pytest.raises(BadInput, match="no flight"):
         tilt_push_response([])
+
+
+def _turned(k: float, seconds: float = 40.0):
+    """Steady flight east at 5 m/s with a slowly swinging heading error (estimate minus truth,
+    up to 6 degrees) and a sideways velocity error of ``k`` x the heading error x the speed, plus
+    independent noise."""
+    t = np.arange(0.0, seconds, 1.0 / RATE)
+    eh = math.radians(6.0) * np.sin(2 * math.pi * t / 13.0)
+    yaw_true = np.full_like(t, math.pi / 2)
+    q_true = np.column_stack([np.cos(yaw_true / 2), np.zeros((len(t), 2)), np.sin(yaw_true / 2)])
+    yaw_est = yaw_true + eh
+    q_est = np.column_stack([np.cos(yaw_est / 2), np.zeros((len(t), 2)), np.sin(yaw_est / 2)])
+    truth = np.column_stack([np.zeros_like(t), np.full_like(t, 5.0)])
+    # flying east, sideways (90 degrees clockwise from above) is south: -x
+    side = k * eh * 5.0 + np.random.default_rng(2).normal(0.0, 0.05, len(t))
+    est = truth + np.column_stack([-side, np.zeros_like(t)])
+    return t, est, truth, q_est, q_true
+
+
+@pytest.mark.parametrize("k", [-0.3, 0.2])
+def test_a_velocity_error_that_follows_the_heading_error_is_measured(k: float):
+    t, est, truth, q_est, q_true = _turned(k)
+    r = heading_turn_response([heading_turn_series(t, est, t, truth, t, q_est, t, q_true, (1.0, 39.0))])
+    assert r.slope == pytest.approx(k, abs=0.03)
+    assert math.copysign(1.0, r.correlation) == math.copysign(1.0, k) and abs(r.correlation) > 0.8
+
+
+def test_independent_heading_and_velocity_errors_have_no_turn():
+    t, est, truth, q_est, q_true = _turned(0.0)
+    r = heading_turn_response([heading_turn_series(t, est, t, truth, t, q_est, t, q_true, (1.0, 39.0))])
+    assert abs(r.slope) < 0.03 and abs(r.correlation) < 0.15
+
+
+def test_a_hover_has_no_heading_turn_to_measure():
+    t, est, truth, q_est, q_true = _turned(-0.3)
+    truth = truth * 0.2  # 1 m/s: below TURN_SPEED
+    with pytest.raises(BadInput, match="steadily faster than 2 m/s"):
+        heading_turn_series(t, est, t, truth, t, q_est, t, q_true, (1.0, 39.0))
+    with pytest.raises(BadInput, match="no flight"):
+        heading_turn_response([])
