@@ -15,7 +15,12 @@ What gives PX4 its flight times, modelled after PX4 v1.15's ``mc_pos_control`` a
   ramp, landing ``MPC_LAND_SPEED`` below ``MPC_LAND_ALT2`` (interpolated up to ``MPC_LAND_ALT1``)
   and ``MPC_LAND_CRWL`` below ``MPC_LAND_ALT3`` (PX4 SIH has a range finder), the descent
   tracking the integrated altitude of that speed profile as PX4's PositionSmoothing does;
-- yaw towards the target (``MPC_YAW_MODE`` 0) at ``MPC_YAWRAUTO_MAX``.
+- the heading ``MPC_YAW_MODE`` picks (``FlightTaskAuto::_set_heading_from_mode``): 0 towards
+  the target, 1 towards home, 2 away from home (each only from outside the acceptance radius,
+  held inside it), 3 along the trajectory (``_generateHeadingAlongTraj``: its velocity, while
+  faster than 0.1 m/s and more than 2 m from the target), 4 as 0 with the trajectory held still
+  until the heading setpoint is within ``MIS_YAW_ERR`` of it; the setpoint turns at
+  ``MPC_YAWRAUTO_MAX`` at most.
 """
 
 from __future__ import annotations
@@ -38,6 +43,10 @@ __all__ = ["IDLE", "Controller", "Goal", "GoalKind", "Limits", "wrap_pi"]
 #: logs: trajectory_setpoint.vz +0.70 at arming, rising to -MPC_TKO_SPEED at MPC_TKO_SPEED /
 #: MPC_TKO_RAMP_T)
 TKO_RAMP_START = 0.7
+#: FlightTaskAuto::_generateHeadingAlongTraj (MPC_YAW_MODE 3): the trajectory's horizontal speed
+#: (m/s) above which, and the distance to the target (m) beyond which, the heading follows it
+ALONG_TRAJ_SPEED = 0.1
+ALONG_TRAJ_DIST = 2.0
 YAWSPEED_FILTER_TAU = 0.2  # s: FlightTaskAuto's _yawspeed_filter
 #: the downward acceleration (net of gravity) at the least thrust in flight: MPC_THR_MIN 0.12 at a
 #: hover thrust of 0.5 gives 0.76 g
@@ -139,6 +148,7 @@ class Limits:
     vel_man_side: float
     vel_man_back: float
     yaw_mode: int
+    mis_yaw_err: float  # rad: MPC_YAW_MODE 4 holds the trajectory until the heading is within it
     acc_rad: float
     alt_rad: float
     traj_p: float
@@ -188,6 +198,7 @@ class Limits:
             vel_man_side=p["MPC_VEL_MAN_SIDE"],
             vel_man_back=p["MPC_VEL_MAN_BACK"],
             yaw_mode=int(p["MPC_YAW_MODE"]),
+            mis_yaw_err=math.radians(p["MIS_YAW_ERR"]),
             acc_rad=p["NAV_ACC_RAD"],
             alt_rad=p["NAV_MC_ALT_RAD"],
             traj_p=p["MPC_XY_TRAJ_P"],
@@ -367,6 +378,12 @@ class Controller:
         #: a takeoff heading for one of FlightTaskAuto's internal waypoints (``update``): the
         #: land detector then treats it as any other auto setpoint
         self.takeoff_via = False
+        #: home's local position (x, y) for MPC_YAW_MODE 1 and 2, NaN until the vehicle has one
+        #: (home_position.valid_lpos); set by the vehicle
+        self.home_xy = (math.nan, math.nan)
+        #: FlightTaskAuto's ``_yaw_sp_aligned`` from the last tick: MPC_YAW_MODE 4 holds the
+        #: trajectory while it is False
+        self.yaw_aligned = True
 
     def reset(self, x: float, y: float, z: float, vx: float, vy: float, vz: float, yaw: float) -> None:
         """Restart the reference at the vehicle's state (mode switch, arming)."""
@@ -404,11 +421,13 @@ class Controller:
         acc_rad: float = 0.0,
         line: tuple[float, float] | None = None,
         tz: float | None = None,
+        hold: bool = False,
     ) -> None:
         """PositionSmoothing towards (tx, ty) and, given ``tz``, the altitude too: then the
         velocity setpoint points straight at the 3-D target (``_generateVelocitySetpoint``), the
         three axes' profiles are synchronized and the vehicle flies a straight line; without it
-        (a landing: z is the descent's own) only x and y."""
+        (a landing: z is the descent's own) only x and y. ``hold``: a zero velocity setpoint on
+        every axis (PositionSmoothing's ``force_zero_velocity_setpoint``)."""
         lim = self.lim
         # PositionSmoothing::_generateTrajectory: while the drone is behind the trajectory, its
         # integration time shrinks with the horizontal distance to it (MPC_XY_ERR_MAX)
@@ -433,7 +452,12 @@ class Controller:
                 dist = math.hypot(ex, ey)
         else:
             self.speed_prev = vmax
-        if tz is not None:
+        if hold:
+            if tz is not None:
+                self._smooth_3d(dts, 0.0, 0.0, 0.0, 0.0)
+            else:
+                self._smooth(dts, 0.0, 0.0)
+        elif tz is not None:
             self._smooth_3d(dts, ex, ey, tz - self.pz, vmax)
         else:
             if dist > 1e-6:
@@ -615,6 +639,11 @@ class Controller:
             d = 0.0 if target != target else max(-step, min(step, wrap_pi(target - self.yaw_sp)))
             self.yaw_sp = wrap_pi(self.yaw_sp + d)
             self.yawrate_sp += (d / dt - self.yawrate_sp) * (dt / (dt + YAWSPEED_FILTER_TAU))
+            # _yaw_sp_aligned: the setpoint within MIS_YAW_ERR of the heading wanted, and turning
+            # slower than MPC_YAWRAUTO_MAX
+            self.yaw_aligned = (
+                target != target or abs(wrap_pi(target - self.yaw_sp)) < lim.mis_yaw_err
+            ) and abs(self.yawrate_sp) < lim.yaw_rate
             return yaw_rate_setpoint(self.yaw_sp, yaw, self.yawrate_sp, lim.att)
         if not math.isnan(target):
             self.yaw_sp = target
@@ -624,6 +653,28 @@ class Controller:
         step = lim.yaw_acc * dt
         self.yawrate_sp += max(-step, min(step, want - self.yawrate_sp))
         return self.yawrate_sp
+
+    def _heading_from_mode(self, tx: float, ty: float, x: float, y: float, acc_rad: float) -> float:
+        """The heading (rad) an auto setpoint without one of its own gets from ``MPC_YAW_MODE``
+        (``FlightTaskAuto::_set_heading_from_mode``, PX4 v1.15), towards (tx, ty), the (internal)
+        target, from (x, y); NaN: hold the heading setpoint. 0 and 4 face the target, 1 home, 2
+        away from home, each only from farther than the acceptance radius (inside it the heading
+        is locked); 3, and 1 or 2 before there is a home, follow the trajectory's velocity
+        (``_generateHeadingAlongTraj``) while it is faster than ``ALONG_TRAJ_SPEED`` and the
+        target farther than ``ALONG_TRAJ_DIST``. Called after the trajectory's tick."""
+        mode = self.lim.yaw_mode
+        if mode == 1 or mode == 2:
+            hx, hy = self.home_xy
+            dx, dy = (hx - x, hy - y) if mode == 1 else (x - hx, y - hy)
+        elif mode == 3:
+            dx = dy = math.nan
+        else:
+            dx, dy = tx - x, ty - y
+        if dx == dx:
+            return math.atan2(dy, dx) if dx * dx + dy * dy > acc_rad * acc_rad else math.nan
+        if math.hypot(self.vx, self.vy) > ALONG_TRAJ_SPEED and math.hypot(tx - x, ty - y) > ALONG_TRAJ_DIST:
+            return math.atan2(self.vy, self.vx)
+        return math.nan
 
     def _track_prev(self, goal: Goal, x: float, y: float, z: float) -> tuple[float, float, float]:
         """The start of the track to ``goal``: its previous waypoint, else, as FlightTaskAuto's
@@ -686,14 +737,15 @@ class Controller:
             # the line the trajectory follows: from the previous waypoint, or from where the
             # vehicle is when it heads for an internal waypoint first (FlightTaskAuto's _prev_wp)
             line = (x, y) if via else prev[:2]
-            self._xy_reference(dt, tx, ty, speed, x, y, final=final, acc_rad=acc_rad, line=line, tz=tz)
+            # MPC_YAW_MODE 4: FlightTaskAuto forces a zero velocity setpoint until the heading
+            # setpoint is aligned (``_yaw_sp_aligned``, from the last tick's _limitYawRate)
+            hold = lim.yaw_mode == 4 and not self.yaw_aligned
+            self._xy_reference(
+                dt, tx, ty, speed, x, y, final=final, acc_rad=acc_rad, line=line, tz=tz, hold=hold
+            )
             target_yaw = goal.yaw
-            if math.isnan(target_yaw) and lim.yaw_mode == 0:
-                # FlightTaskAuto::_set_heading_from_mode: heading towards the (internal) target
-                # while outside the acceptance radius, locked inside it
-                d = math.hypot(tx - x, ty - y)
-                if d >= acc_rad:
-                    target_yaw = math.atan2(ty - y, tx - x)
+            if math.isnan(target_yaw):
+                target_yaw = self._heading_from_mode(tx, ty, x, y, acc_rad)
             az = self._z_loops(dt, z, vz, True, auto=True)
             ax, ay = self._xy_loops(dt, x, y, vx, vy, az)
         elif kind is GoalKind.TAKEOFF:
@@ -723,12 +775,11 @@ class Controller:
                 if ramped > self.vz:
                     self.vz, self.az_ref = ramped, 0.0
             target_yaw = goal.yaw
-            if math.isnan(target_yaw) and lim.yaw_mode == 0:
-                # FlightTaskAuto::_set_heading_from_mode in the takeoff too: drifted farther than
-                # the acceptance radius from the takeoff point, the vehicle turns to face it
-                d = math.hypot(goal.x - x, goal.y - y)
-                if d > lim.acc_rad:
-                    target_yaw = math.atan2(goal.y - y, goal.x - x)
+            if math.isnan(target_yaw):
+                # FlightTaskAuto::_set_heading_from_mode in the takeoff too: with MPC_YAW_MODE 0,
+                # drifted farther than the acceptance radius from the takeoff point, the vehicle
+                # turns to face it
+                target_yaw = self._heading_from_mode(goal.x, goal.y, x, y, lim.acc_rad)
             up = math.inf
             if self.px4_vertical and self.ramp < lim.tko_ramp:
                 up = self._takeoff_ramp(self.ramp)

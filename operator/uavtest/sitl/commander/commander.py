@@ -608,6 +608,7 @@ class Commander:
         lat, lon = self.proj.reproject(st.x, st.y)
         self.home = (st.x, st.y, st.z, lat, lon, self.home_alt - st.z, st.yaw)
         self.nav.home = (st.x, st.y, st.z, st.yaw)  # home_position.yaw: the heading home was set with
+        self.v.ctrl.home_xy = (st.x, st.y)  # FlightTaskAuto's home for MPC_YAW_MODE 1 and 2
         self.nav.check_mission_feasible()  # PX4 rechecks the mission when home changes
         self.home_set = True
         self._home_count += 1
