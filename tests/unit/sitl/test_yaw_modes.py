@@ -52,7 +52,10 @@ def _fly(mode: int, seed: int = 1) -> ULog:
 
 
 def _headings_mid_leg(
-    ulog: ULog, start: tuple[float, float], end: tuple[float, float], window: tuple[float, float] = (10.0, 20.0)
+    ulog: ULog,
+    start: tuple[float, float],
+    end: tuple[float, float],
+    window: tuple[float, float] = (10.0, 20.0),
 ) -> np.ndarray:
     """The estimated heading (deg) where the estimate is ``window`` m down the leg from start to end."""
     lp = ulog.get_dataset("vehicle_local_position").data
