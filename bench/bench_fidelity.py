@@ -305,34 +305,13 @@ def _measure(ulog: ULog, into: Flights) -> None:
             ag = ulog.get_dataset("vehicle_attitude_groundtruth").data
             at = ulog.get_dataset("vehicle_attitude").data
             quat = [np.column_stack([d[f"q[{i}]"] for i in range(4)]) for d in (at, ag)]
+            # the horizontal velocities and attitudes, estimate and truth, both series read
+            series = (t, estimate[:, 2:], gt["timestamp"] / 1e6, truth[:, 2:])
+            series += (at["timestamp"] / 1e6, quat[0], ag["timestamp"] / 1e6, quat[1])
             with contextlib.suppress(BadInput):  # never slow for 2 s in the window
-                into.push.append(
-                    tilt_push_series(
-                        t,
-                        estimate[:, 2:],
-                        gt["timestamp"] / 1e6,
-                        truth[:, 2:],
-                        at["timestamp"] / 1e6,
-                        quat[0],
-                        ag["timestamp"] / 1e6,
-                        quat[1],
-                        (traj.t[0] + 6.0, traj.t[-1] - 3.0),
-                    )
-                )
+                into.push.append(tilt_push_series(*series, (traj.t[0] + 6.0, traj.t[-1] - 3.0)))
             with contextlib.suppress(BadInput):  # never steady above 2 m/s for 2 s
-                into.turn.append(
-                    heading_turn_series(
-                        t,
-                        estimate[:, 2:],
-                        gt["timestamp"] / 1e6,
-                        truth[:, 2:],
-                        at["timestamp"] / 1e6,
-                        quat[0],
-                        ag["timestamp"] / 1e6,
-                        quat[1],
-                        flown,
-                    )
-                )
+                into.turn.append(heading_turn_series(*series, flown))
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
     q = np.column_stack([att[f"q[{i}]"] for i in range(4)])
@@ -576,26 +555,32 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "",
             "",
         )
-    if px4_all.push and ours_all.push:
-        theirs, mine = tilt_push_response(px4_all.push), tilt_push_response(ours_all.push)
-        t.add_row(
+    regressions = (
+        (
             "velocity error against g x the tilt error, leaky over 1 s, below 1 m/s: slope "
             "(correlation); 1: EKF2 misses the push",
-            f"{theirs.slope:.2f} ({theirs.correlation:.2f})",
-            f"{mine.slope:.2f} ({mine.correlation:.2f})",
-            "",
-            "",
-        )
-    if px4_all.turn and ours_all.turn:
-        theirs, mine = heading_turn_response(px4_all.turn), heading_turn_response(ours_all.turn)
-        t.add_row(
+            tilt_push_response,
+            px4_all.push,
+            ours_all.push,
+        ),
+        (
             "sideways velocity error against EKF2's heading error x speed, steady above 2 m/s: "
             "slope (correlation); PX4's heading and velocity errors go together",
-            f"{theirs.slope:.2f} ({theirs.correlation:.2f})",
-            f"{mine.slope:.2f} ({mine.correlation:.2f})",
-            "",
-            "",
-        )
+            heading_turn_response,
+            px4_all.turn,
+            ours_all.turn,
+        ),
+    )
+    for label, response, theirs_series, ours_series in regressions:
+        if theirs_series and ours_series:
+            theirs, mine = response(theirs_series), response(ours_series)
+            t.add_row(
+                label,
+                f"{theirs.slope:.2f} ({theirs.correlation:.2f})",
+                f"{mine.slope:.2f} ({mine.correlation:.2f})",
+                "",
+                "",
+            )
     if not all(px4_all.completed) or not all(ours_all.completed):
         t.add_row(
             "flights that finished the mission (the others, stalled or blocked, measured nowhere "
