@@ -54,6 +54,7 @@ from uavtest.analysis.estimate_phases import (
     CLIMB_AFTER,
     PositionErrors,
     SpeedErrors,
+    VelocityAttitude,
     body_errors_by_speed,
     climb_wander,
     heading_turn_response,
@@ -306,12 +307,20 @@ def _measure(ulog: ULog, into: Flights) -> None:
             at = ulog.get_dataset("vehicle_attitude").data
             quat = [np.column_stack([d[f"q[{i}]"] for i in range(4)]) for d in (at, ag)]
             # the horizontal velocities and attitudes, estimate and truth, both series read
-            series = (t, estimate[:, 2:], gt["timestamp"] / 1e6, truth[:, 2:])
-            series += (at["timestamp"] / 1e6, quat[0], ag["timestamp"] / 1e6, quat[1])
+            series = VelocityAttitude(
+                t,
+                estimate[:, 2:],
+                gt["timestamp"] / 1e6,
+                truth[:, 2:],
+                at["timestamp"] / 1e6,
+                quat[0],
+                ag["timestamp"] / 1e6,
+                quat[1],
+            )
             with contextlib.suppress(BadInput):  # never slow for 2 s in the window
-                into.push.append(tilt_push_series(*series, (traj.t[0] + 6.0, traj.t[-1] - 3.0)))
+                into.push.append(tilt_push_series(series, (traj.t[0] + 6.0, traj.t[-1] - 3.0)))
             with contextlib.suppress(BadInput):  # never steady above 2 m/s for 2 s
-                into.turn.append(heading_turn_series(*series, flown))
+                into.turn.append(heading_turn_series(series, flown))
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
     q = np.column_stack([att[f"q[{i}]"] for i in range(4)])

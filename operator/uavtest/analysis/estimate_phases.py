@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from scipy.signal import lfilter
@@ -54,6 +55,7 @@ __all__ = [
     "Regression",
     "SpeedErrors",
     "TiltPush",
+    "VelocityAttitude",
     "body_errors_by_speed",
     "climb_wander",
     "heading_turn_response",
@@ -107,6 +109,21 @@ class Regression:
 
 #: the velocity error's response to g x the tilt error, leaky-integrated (``tilt_push_response``)
 TiltPush = Regression
+
+
+class VelocityAttitude(NamedTuple):
+    """One flight's horizontal velocities and attitudes, estimate and ground truth, each with its
+    own timestamps (s): ``velocity`` / ``truth_velocity`` (N, 2) / (M, 2), NED; ``q`` / ``q_truth``
+    attitudes (w, x, y, z). What ``tilt_push_series`` and ``heading_turn_series`` read."""
+
+    t: np.ndarray
+    velocity: np.ndarray
+    t_truth: np.ndarray
+    truth_velocity: np.ndarray
+    t_att: np.ndarray
+    q: np.ndarray
+    t_att_truth: np.ndarray
+    q_truth: np.ndarray
 
 
 def _grid(window: tuple[float, float], what: str) -> np.ndarray:
@@ -189,23 +206,12 @@ def climb_wander(
     return float(np.mean(np.hypot(np.interp(g, t, x) - x0, np.interp(g, t, y) - y0)))
 
 
-def tilt_push_series(
-    t: np.ndarray,
-    velocity: np.ndarray,
-    t_truth: np.ndarray,
-    truth_velocity: np.ndarray,
-    t_att: np.ndarray,
-    q: np.ndarray,
-    t_att_truth: np.ndarray,
-    q_truth: np.ndarray,
-    window: tuple[float, float],
-) -> tuple[np.ndarray, np.ndarray]:
+def tilt_push_series(flight: VelocityAttitude, window: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
     """One flight's (push, velocity error) samples, both axes, where the true speed is below
-    ``SLOW_SPEED`` within ``window``, each about its mean. ``velocity`` / ``truth_velocity``: (N, 2)
-    / (M, 2) horizontal velocities (NED) of the estimate and the truth; ``q`` / ``q_truth``:
-    attitudes (w, x, y, z). The push is -g x the body z axis's horizontal offset (estimate minus
-    truth), leaky-integrated over ``PUSH_TAU``: a tilt error towards north hides a push towards
-    south. A flight with no slow stretch of 2 s raises ``BadInput``."""
+    ``SLOW_SPEED`` within ``window``, each about its mean. The push is -g x the body z axis's
+    horizontal offset (estimate minus truth), leaky-integrated over ``PUSH_TAU``: a tilt error
+    towards north hides a push towards south. A flight with no slow stretch of 2 s raises ``BadInput``."""
+    t, velocity, t_truth, truth_velocity, t_att, q, t_att_truth, q_truth = flight
     g = _grid(window, "tilt push")
     est = np.column_stack([np.interp(g, t_att, q[:, i]) for i in range(4)])
     tru = np.column_stack([np.interp(g, t_att_truth, q_truth[:, i]) for i in range(4)])
@@ -251,23 +257,15 @@ def _yaw(q: np.ndarray) -> np.ndarray:
 
 
 def heading_turn_series(
-    t: np.ndarray,
-    velocity: np.ndarray,
-    t_truth: np.ndarray,
-    truth_velocity: np.ndarray,
-    t_att: np.ndarray,
-    q: np.ndarray,
-    t_att_truth: np.ndarray,
-    q_truth: np.ndarray,
-    window: tuple[float, float],
+    flight: VelocityAttitude, window: tuple[float, float]
 ) -> tuple[np.ndarray, np.ndarray]:
     """One flight's (heading error x true speed, sideways velocity error) samples where it flies
     steadily within ``window``: faster than ``TURN_SPEED``, its true acceleration (0.5 s mean)
-    below ``STEADY_ACC``. ``velocity`` / ``truth_velocity``: (N, 2) / (M, 2) horizontal velocities
-    (NED); ``q`` / ``q_truth``: attitudes (w, x, y, z). The heading error is the estimate's minus
+    below ``STEADY_ACC``. The heading error is the estimate's minus
     the truth's (rad); sideways is 90 degrees clockwise from the true velocity seen from above
     (east of a vehicle flying north), the error the estimate's minus the truth's. A flight never
     steady for 2 s raises ``BadInput``."""
+    t, velocity, t_truth, truth_velocity, t_att, q, t_att_truth, q_truth = flight
     g = _grid(window, "heading turn")
     vt = np.column_stack([np.interp(g, t_truth, truth_velocity[:, i]) for i in range(2)])
     speed = np.hypot(vt[:, 0], vt[:, 1])

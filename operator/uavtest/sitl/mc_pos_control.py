@@ -639,11 +639,12 @@ class Controller:
             d = 0.0 if target != target else max(-step, min(step, wrap_pi(target - self.yaw_sp)))
             self.yaw_sp = wrap_pi(self.yaw_sp + d)
             self.yawrate_sp += (d / dt - self.yawrate_sp) * (dt / (dt + YAWSPEED_FILTER_TAU))
-            # _yaw_sp_aligned: the setpoint within MIS_YAW_ERR of the heading wanted, and turning
-            # slower than MPC_YAWRAUTO_MAX
-            self.yaw_aligned = (
-                target != target or abs(wrap_pi(target - self.yaw_sp)) < lim.mis_yaw_err
-            ) and abs(self.yawrate_sp) < lim.yaw_rate
+            if lim.yaw_mode == 4:  # only MPC_YAW_MODE 4 waits on it: nothing more per tick else
+                # _yaw_sp_aligned: the setpoint within MIS_YAW_ERR of the heading wanted, and
+                # turning slower than MPC_YAWRAUTO_MAX
+                self.yaw_aligned = (
+                    target != target or abs(wrap_pi(target - self.yaw_sp)) < lim.mis_yaw_err
+                ) and abs(self.yawrate_sp) < lim.yaw_rate
             return yaw_rate_setpoint(self.yaw_sp, yaw, self.yawrate_sp, lim.att)
         if not math.isnan(target):
             self.yaw_sp = target

@@ -11,6 +11,7 @@ import pytest
 
 from uavtest.analysis.estimate_phases import (
     RATE,
+    VelocityAttitude,
     body_errors_by_speed,
     climb_wander,
     heading_turn_response,
@@ -22,6 +23,11 @@ from uavtest.analysis.estimate_phases import (
 from uavtest.errors import BadInput
 
 G = 9.80665
+
+
+def _series(t, est, truth, q_est, q_true) -> VelocityAttitude:
+    """A synthetic flight's series, all on one clock."""
+    return VelocityAttitude(t, est, t, truth, t, q_est, t, q_true)
 
 
 def _flight(errors_rest: tuple[float, float], errors_cruise: tuple[float, float]):
@@ -109,7 +115,9 @@ def _tilted(push_seen: float, seconds: float = 30.0, speed: float = 0.0):
 @pytest.mark.parametrize("missed", [1.0, 0.3])
 def test_the_push_a_tilt_error_hides_is_measured_as_the_share_ekf2_misses(missed: float):
     t, est, truth, q_est, q_true = _tilted(missed)
-    series = tilt_push_series(t, est, t, truth, t, q_est, t, q_true, (0.0, 29.0))  # both from rest
+    series = tilt_push_series(
+        VelocityAttitude(t, est, t, truth, t, q_est, t, q_true), (0.0, 29.0)
+    )  # both from rest
     r = tilt_push_response([series])
     assert r.slope == pytest.approx(missed, abs=0.02)
     assert r.correlation > 0.5  # the east axis carries no push and no error
@@ -119,14 +127,14 @@ def test_an_error_that_ignores_the_tilt_has_no_response():
     t, est, truth, q_est, q_true = _tilted(0.0)
     rng = np.random.default_rng(1)
     est = est + np.column_stack([rng.normal(0, 0.2, len(t)), rng.normal(0, 0.2, len(t))])
-    r = tilt_push_response([tilt_push_series(t, est, t, truth, t, q_est, t, q_true, (2.0, 29.0))])
+    r = tilt_push_response([tilt_push_series(_series(t, est, truth, q_est, q_true), (2.0, 29.0))])
     assert abs(r.slope) < 0.1 and abs(r.correlation) < 0.1
 
 
 def test_a_flight_never_slow_has_no_tilt_push_to_measure():
     t, est, truth, q_est, q_true = _tilted(1.0, speed=5.0)
     with pytest.raises(BadInput, match="slower than 1 m/s"):
-        tilt_push_series(t, est, t, truth, t, q_est, t, q_true, (2.0, 29.0))
+        tilt_push_series(_series(t, est, truth, q_est, q_true), (2.0, 29.0))
     with pytest.raises(BadInput, match="no flight"):
         tilt_push_response([])
 
@@ -151,14 +159,14 @@ def _turned(k: float, seconds: float = 40.0):
 @pytest.mark.parametrize("k", [-0.3, 0.2])
 def test_a_velocity_error_that_follows_the_heading_error_is_measured(k: float):
     t, est, truth, q_est, q_true = _turned(k)
-    r = heading_turn_response([heading_turn_series(t, est, t, truth, t, q_est, t, q_true, (1.0, 39.0))])
+    r = heading_turn_response([heading_turn_series(_series(t, est, truth, q_est, q_true), (1.0, 39.0))])
     assert r.slope == pytest.approx(k, abs=0.03)
     assert math.copysign(1.0, r.correlation) == math.copysign(1.0, k) and abs(r.correlation) > 0.8
 
 
 def test_independent_heading_and_velocity_errors_have_no_turn():
     t, est, truth, q_est, q_true = _turned(0.0)
-    r = heading_turn_response([heading_turn_series(t, est, t, truth, t, q_est, t, q_true, (1.0, 39.0))])
+    r = heading_turn_response([heading_turn_series(_series(t, est, truth, q_est, q_true), (1.0, 39.0))])
     assert abs(r.slope) < 0.03 and abs(r.correlation) < 0.15
 
 
@@ -166,6 +174,6 @@ def test_a_hover_has_no_heading_turn_to_measure():
     t, est, truth, q_est, q_true = _turned(-0.3)
     truth = truth * 0.2  # 1 m/s: below TURN_SPEED
     with pytest.raises(BadInput, match="steadily faster than 2 m/s"):
-        heading_turn_series(t, est, t, truth, t, q_est, t, q_true, (1.0, 39.0))
+        heading_turn_series(_series(t, est, truth, q_est, q_true), (1.0, 39.0))
     with pytest.raises(BadInput, match="no flight"):
         heading_turn_response([])
