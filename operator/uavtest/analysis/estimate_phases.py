@@ -206,23 +206,27 @@ def climb_wander(
     return float(np.mean(np.hypot(np.interp(g, t, x) - x0, np.interp(g, t, y) - y0)))
 
 
+def _truth_and_error(flight: VelocityAttitude, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The true horizontal velocity on grid ``g`` and the estimate's error against it, (N, 2) each."""
+    vt = np.column_stack([np.interp(g, flight.t_truth, flight.truth_velocity[:, i]) for i in range(2)])
+    return vt, errors_on(g, flight.t, flight.velocity, flight.t_truth, flight.truth_velocity, 2)
+
+
 def tilt_push_series(flight: VelocityAttitude, window: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
     """One flight's (push, velocity error) samples, both axes, where the true speed is below
     ``SLOW_SPEED`` within ``window``, each about its mean. The push is -g x the body z axis's
     horizontal offset (estimate minus truth), leaky-integrated over ``PUSH_TAU``: a tilt error
     towards north hides a push towards south. A flight with no slow stretch of 2 s raises ``BadInput``."""
-    t, velocity, t_truth, truth_velocity, t_att, q, t_att_truth, q_truth = flight
     g = _grid(window, "tilt push")
-    est = np.column_stack([np.interp(g, t_att, q[:, i]) for i in range(4)])
-    tru = np.column_stack([np.interp(g, t_att_truth, q_truth[:, i]) for i in range(4)])
+    est = np.column_stack([np.interp(g, flight.t_att, flight.q[:, i]) for i in range(4)])
+    tru = np.column_stack([np.interp(g, flight.t_att_truth, flight.q_truth[:, i]) for i in range(4)])
     offset = body_z_from_quaternion(est) - body_z_from_quaternion(tru)
     # push[i] = a push[i-1] - g offset[i] / RATE, push[0] = 0: at rest at the window's start
     a = np.exp(-1.0 / (RATE * PUSH_TAU))
     drive = offset.copy()
     drive[0] = 0.0
     push = lfilter([-GRAVITY / RATE], [1.0, -a], drive, axis=0)
-    vt = np.column_stack([np.interp(g, t_truth, truth_velocity[:, i]) for i in range(2)])
-    err = errors_on(g, t, velocity, t_truth, truth_velocity, 2)
+    vt, err = _truth_and_error(flight, g)
     slow = np.hypot(vt[:, 0], vt[:, 1]) < SLOW_SPEED
     if slow.sum() < 2 * RATE:
         raise BadInput("tilt push: the vehicle was slower than 1 m/s for less than 2 s")
@@ -261,23 +265,21 @@ def heading_turn_series(
 ) -> tuple[np.ndarray, np.ndarray]:
     """One flight's (heading error x true speed, sideways velocity error) samples where it flies
     steadily within ``window``: faster than ``TURN_SPEED``, its true acceleration (0.5 s mean)
-    below ``STEADY_ACC``. The heading error is the estimate's minus
-    the truth's (rad); sideways is 90 degrees clockwise from the true velocity seen from above
-    (east of a vehicle flying north), the error the estimate's minus the truth's. A flight never
-    steady for 2 s raises ``BadInput``."""
-    t, velocity, t_truth, truth_velocity, t_att, q, t_att_truth, q_truth = flight
+    below ``STEADY_ACC``. The heading error is the estimate's minus the truth's (rad); sideways is
+    90 degrees clockwise from the true velocity seen from above (east of a vehicle flying north),
+    the error the estimate's minus the truth's. A flight never steady for 2 s raises ``BadInput``."""
     g = _grid(window, "heading turn")
-    vt = np.column_stack([np.interp(g, t_truth, truth_velocity[:, i]) for i in range(2)])
+    vt, err = _truth_and_error(flight, g)
     speed = np.hypot(vt[:, 0], vt[:, 1])
     k = max(1, round(0.5 * RATE))
     acc = np.hypot(*(np.convolve(np.gradient(vt[:, i], g), np.ones(k) / k, "same") for i in range(2)))
     steady = (speed > TURN_SPEED) & (acc < STEADY_ACC)
     if steady.sum() < 2 * RATE:
         raise BadInput("heading turn: the vehicle flew steadily faster than 2 m/s for less than 2 s")
-    err = errors_on(g, t, velocity, t_truth, truth_velocity, 2)[steady]
+    err = err[steady]
     ux, uy = (vt[steady] / speed[steady, None]).T
     side = -err[:, 0] * uy + err[:, 1] * ux
-    eh = np.interp(g, t_att, _yaw(q)) - np.interp(g, t_att_truth, _yaw(q_truth))
+    eh = np.interp(g, flight.t_att, _yaw(flight.q)) - np.interp(g, flight.t_att_truth, _yaw(flight.q_truth))
     eh = np.angle(np.exp(1j * eh))[steady]
     return eh * speed[steady], side
 

@@ -671,7 +671,7 @@ class Controller:
             dx = dy = math.nan
         else:
             dx, dy = tx - x, ty - y
-        if dx == dx:
+        if not math.isnan(dx):
             return math.atan2(dy, dx) if dx * dx + dy * dy > acc_rad * acc_rad else math.nan
         if math.hypot(self.vx, self.vy) > ALONG_TRAJ_SPEED and math.hypot(tx - x, ty - y) > ALONG_TRAJ_DIST:
             return math.atan2(self.vy, self.vx)
