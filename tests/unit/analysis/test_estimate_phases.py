@@ -16,6 +16,8 @@ from uavtest.analysis.estimate_phases import (
     climb_wander,
     heading_turn_response,
     heading_turn_series,
+    leg_start_means,
+    leg_start_response,
     position_errors_by_phase,
     tilt_push_response,
     tilt_push_series,
@@ -177,3 +179,44 @@ def test_a_hover_has_no_heading_turn_to_measure():
         heading_turn_series(_series(t, est, truth, q_est, q_true), (1.0, 39.0))
     with pytest.raises(BadInput, match="no flight"):
         heading_turn_response([])
+
+
+def _legs(response, heading_deg: tuple[float, float]):
+    """A log of 50 s: a 60 m leg north set at 0 s, a 60 m leg east at 20 s, a 15 m leg at 40 s and
+    a 60 m leg south at 45 s (the log ends 5 s into it). On the first two the heading error is
+    ``heading_deg`` (constant), and the velocity error across the leg ``response``(seconds since
+    the leg's start) times the heading error's sign."""
+    t = np.arange(0.0, 50.0, 1.0 / RATE)
+    changes = np.array(
+        [[-5.0, 0, 0, 0.5], [0.0, 60, 0, 0.5], [20.0, 60, 60, 0.5], [40.0, 60, 75, 0.5], [45.0, 0, 75, 0.5]]
+    )
+    first = t < 20.0
+    eh = np.radians(np.where(first, heading_deg[0], heading_deg[1]))
+    since = np.where(first, t, t - 20.0)
+    side = np.array([response(s) for s in since]) * np.sign(eh)
+    across = np.where(first[:, None], [[0.0, 1.0]], [[-1.0, 0.0]])  # 90 degrees clockwise of the leg
+    truth = np.column_stack([np.where(first, 3.0, 0.0), np.where(first, 0.0, 3.0)])
+    est = truth + side[:, None] * across
+    q_true = np.column_stack([np.ones_like(t), np.zeros((len(t), 3))])
+    q_est = np.column_stack([np.cos(eh / 2), np.zeros((len(t), 2)), np.sin(eh / 2)])
+    return _series(t, est, truth, q_est, q_true), changes
+
+
+def test_the_error_across_a_new_leg_is_signed_by_the_heading_error():
+    # PX4's shape: the miss of the acceleration, then the bias that pulls the estimate back
+    flight, changes = _legs(lambda s: 0.12 if s < 2.0 else -0.2, (4.0, -4.0))
+    legs = leg_start_response(flight, changes)
+    assert len(legs) == 2  # the 15 m leg and the leg the log ends within are left out
+    for leg in legs:
+        assert leg == pytest.approx([0.12, -0.2, -0.2, -0.2], abs=1e-6)
+    assert leg_start_means(legs) == pytest.approx([0.12, -0.2, -0.2, -0.2], abs=1e-6)
+
+
+def test_an_error_that_ignores_the_heading_error_averages_out():
+    # the same error across both legs whatever the heading error's sign: no signed response
+    flight, changes = _legs(lambda s: 0.1, (4.0, 4.0))
+    t = flight.t
+    eh = np.radians(np.where(t < 20.0, 4.0, -4.0))
+    flight = flight._replace(q=np.column_stack([np.cos(eh / 2), np.zeros((len(t), 2)), np.sin(eh / 2)]))
+    assert leg_start_means(leg_start_response(flight, changes)) == pytest.approx([0.0] * 4, abs=1e-6)
+    assert np.isnan(leg_start_means([])).all()
