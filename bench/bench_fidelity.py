@@ -53,6 +53,7 @@ from uavtest.analysis.attitude_response import fit as fit_attitude_response
 from uavtest.analysis.estimate_phases import (
     CLIMB_AFTER,
     LEG_RESPONSE_AT,
+    LEG_RESPONSE_MIN,
     LEG_RESPONSE_SIGN_AT,
     PositionErrors,
     SpeedErrors,
@@ -606,7 +607,7 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
     if px4_all.legs and ours_all.legs:
         at = " / ".join(f"{s:g}" for s in LEG_RESPONSE_AT)
         t.add_row(
-            f"EKF2 velocity error across a new leg (≥ 40 m), signed by its heading error "
+            f"EKF2 velocity error across a new leg (≥ {LEG_RESPONSE_MIN:g} m), signed by its heading error "
             f"{LEG_RESPONSE_SIGN_AT:g} s in, mean m/s at {at} s after the leg's start; PX4: the "
             "miss turns into a bias that pulls the estimate back",
             _leg_means(px4_all.legs),
