@@ -318,6 +318,7 @@ def leg_start_response(flight: VelocityAttitude, changes: np.ndarray) -> list[np
     those whose heading error is exactly zero are left out."""
     out: list[np.ndarray] = []
     ends = min(flight.t[-1], flight.t_truth[-1], flight.t_att[-1], flight.t_att_truth[-1])
+    yaw, yaw_truth = _yaw(flight.q), _yaw(flight.q_truth)  # once per flight, not per leg
     for k in range(1, len(changes)):
         _, px, py, _ = changes[k - 1]
         start, tx, ty, _ = changes[k]
@@ -329,8 +330,7 @@ def leg_start_response(flight: VelocityAttitude, changes: np.ndarray) -> list[np
         _, err = _truth_and_error(flight, g)
         side = -err[:, 0] * uy + err[:, 1] * ux
         at = start + LEG_RESPONSE_SIGN_AT
-        eh = np.interp(at, flight.t_att, _yaw(flight.q))
-        eh -= np.interp(at, flight.t_att_truth, _yaw(flight.q_truth))
+        eh = np.interp(at, flight.t_att, yaw) - np.interp(at, flight.t_att_truth, yaw_truth)
         sign = float(np.sign(np.angle(np.exp(1j * eh))))
         if sign != 0.0:
             out.append(side * sign)
