@@ -31,6 +31,7 @@ import argparse
 import contextlib
 import dataclasses
 import io
+import math
 import os
 import statistics
 import sys
@@ -71,7 +72,9 @@ from uavtest.analysis.estimate_phases import (
 from uavtest.analysis.fidelity import (
     FIGURES,
     LIFTOFF_RISE,
+    NOISE_Z,
     FlightFigures,
+    Spread,
     altitude_drift,
     arrival_velocity_errors,
     body_frame_errors,
@@ -82,6 +85,7 @@ from uavtest.analysis.fidelity import (
     estimate_errors,
     estimate_lead,
     flight_figures,
+    group_standard_error,
     pairs_between,
     pairs_within,
     pooled_autocorrelation,
@@ -90,6 +94,7 @@ from uavtest.analysis.fidelity import (
     takeoff_turned_back,
     velocity_errors,
     vertical_estimate_errors,
+    within_noise,
 )
 from uavtest.analysis.ulog import read_ulog, setpoint_changes, topic, trajectory_from_ulog
 from uavtest.analysis.waypoint_passes import (
@@ -477,6 +482,17 @@ def _error_stats(series: list) -> str:
     return f"{std:.2f}; {acs}"
 
 
+def _with_error(s: Spread, error: float) -> str:
+    """A built-in-vs-PX4 cell: its mean ± one standard error over the seeds, and its range."""
+    return f"{s.mean:.2f} ± {error:.2f} ({s.low:.2f}–{s.high:.2f})"
+
+
+def _verdict(inside: bool, noisy: bool) -> str:
+    """yes / no; "within noise" when the mean is within ``NOISE_Z`` standard errors of the bound."""
+    word = "yes" if inside else "[red]no[/red]"
+    return f"{word} (within noise)" if noisy else word
+
+
 def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
     px4, ours = px4_all.figures, ours_all.figures
     t = Table(title=f"{name}: built-in ({len(ours)} seeds) vs PX4 v1.15 SIH ({len(px4)} runs)")
@@ -485,26 +501,36 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
     t.add_column("built-in vs PX4", justify="right")
     t.add_column("built-in vs built-in", justify="right")
     t.add_column("inside PX4's range", justify="center")
+    t.caption = (
+        "built-in vs PX4: mean ± one standard error over the seeds (range); within noise: the mean "
+        f"lies within {NOISE_Z:g} standard errors of PX4's bound, more seeds could turn the verdict"
+    )
     ok = True
     px4_pairs, between, within = pairs_within(px4), pairs_between(ours, px4), pairs_within(ours)
     for attr, label, unit in FIGURES:
         theirs = spread([getattr(p, attr) for p in px4_pairs]) if px4_pairs else None
-        cross = spread([getattr(p, attr) for p in between])
+        values = [getattr(p, attr) for p in between]
+        cross, error = spread(values), group_standard_error(values, len(ours))
         own = spread([getattr(p, attr) for p in within]) if within else None
-        inside = "—" if theirs is None else ("yes" if cross.inside(theirs) else "[red]no[/red]")
+        inside = "—"
+        if theirs is not None:
+            inside = _verdict(cross.inside(theirs), within_noise(cross.mean, error, -math.inf, theirs.high))
         ok &= theirs is None or cross.inside(theirs)
-        t.add_row(f"{label}, {unit}", str(theirs or "—"), str(cross), str(own or "—"), inside)
+        t.add_row(f"{label}, {unit}", str(theirs or "—"), _with_error(cross, error), str(own or "—"), inside)
     ft_px4 = spread([f.flight_time for f in px4])
     ft_ours = spread([f.flight_time for f in ours])
+    ft_error = ft_ours.std / math.sqrt(ft_ours.n)
     # two-sided: a mean flight time outside PX4's range is off either way
     ft_inside = ft_px4.low <= ft_ours.mean <= ft_px4.high
     ok &= len(px4) < 2 or ft_inside
     t.add_row(
         "flight time, s (PX4 / built-in)",
         str(ft_px4),
-        str(ft_ours),
+        _with_error(ft_ours, ft_error),
         "",
-        "—" if len(px4) < 2 else ("yes" if ft_inside else "[red]no[/red]"),
+        "—"
+        if len(px4) < 2
+        else _verdict(ft_inside, within_noise(ft_ours.mean, ft_error, ft_px4.low, ft_px4.high)),
     )
     t.add_row(
         "flight-time spread: standard deviation (max − min), s",

@@ -51,6 +51,7 @@ __all__ = [
     "ARRIVAL_WINDOW",
     "FIGURES",
     "LIFTOFF_RISE",
+    "NOISE_Z",
     "NORMALISED_POINTS",
     "FlightFigures",
     "PairFigures",
@@ -68,6 +69,7 @@ __all__ = [
     "estimate_errors",
     "flight_figures",
     "from_liftoff",
+    "group_standard_error",
     "normalised",
     "pairs_between",
     "pairs_within",
@@ -77,6 +79,7 @@ __all__ = [
     "takeoff_turned_back",
     "velocity_errors",
     "vertical_estimate_errors",
+    "within_noise",
 ]
 
 NORMALISED_POINTS = 200
@@ -511,6 +514,39 @@ class Spread:
     def inside(self, other: Spread) -> bool:
         """This figure's mean lies within ``other``'s range (at most its maximum)."""
         return self.mean <= other.high
+
+
+#: standard errors within which a mean is too close to its bound for the verdict to stand: more
+#: seeds could turn it either way
+NOISE_Z = 2.0
+
+
+def group_standard_error(values: Sequence[float], groups: int) -> float:
+    """The standard error of the mean of ``values`` that come in ``groups`` equal, consecutive,
+    independent groups, dependent within: a built-in seed against every PX4 flight, in
+    ``pairs_between``'s order (the pairs of one seed share its flight, so they are not independent
+    draws, the seeds are). The spread of the groups' means over the root of their number; 0 for
+    one group. BadInput when ``values`` do not split into ``groups`` equal groups."""
+    n = len(values)
+    if groups < 1 or n == 0 or n % groups:
+        raise BadInput(f"{n} values do not split into {groups} equal groups")
+    if groups == 1:
+        return 0.0
+    means = np.asarray(values, dtype=np.float64).reshape(groups, n // groups).mean(axis=1)
+    return float(means.std(ddof=1) / np.sqrt(groups))
+
+
+def within_noise(mean: float, error: float, low: float, high: float, z: float = NOISE_Z) -> bool:
+    """Whether ``mean`` lies within ``z`` standard errors (``error``) of the bound of [``low``,
+    ``high``] that decides whether it is inside (pass ``-inf`` for a one-sided range): then the
+    verdict inside / outside is the seeds' luck, not the simulator's. Pure."""
+    if mean < low:
+        gap = low - mean
+    elif mean > high:
+        gap = mean - high
+    else:
+        gap = min(mean - low, high - mean)
+    return gap <= z * error
 
 
 def spread(values: Sequence[float]) -> Spread:

@@ -17,6 +17,7 @@ from uavtest.analysis.fidelity import (
     estimate_lead,
     flight_figures,
     from_liftoff,
+    group_standard_error,
     pairs_between,
     pairs_within,
     pooled_autocorrelation,
@@ -25,6 +26,7 @@ from uavtest.analysis.fidelity import (
     takeoff_turned_back,
     velocity_errors,
     vertical_estimate_errors,
+    within_noise,
 )
 from uavtest.analysis.trajectory import Trajectory
 from uavtest.errors import BadInput
@@ -105,6 +107,30 @@ def test_pairs_and_spread():
     assert spread([3.0]).std == 0.0
     with pytest.raises(BadInput):
         spread([])
+
+
+def test_a_built_in_vs_px4_mean_is_as_certain_as_its_seeds_not_its_pairs():
+    # three seeds, each against four PX4 flights: a seed's four pairs share its one flight
+    values = [1.0] * 4 + [2.0] * 4 + [3.0] * 4
+    error = group_standard_error(values, 3)
+    assert error == pytest.approx(1.0 / np.sqrt(3.0))  # the seeds' means 1, 2, 3
+    # twelve independent draws would claim less than half that
+    assert float(np.std(values, ddof=1) / np.sqrt(12)) < 0.5 * error
+    assert group_standard_error([2.0, 4.0], 1) == 0.0  # one seed: nothing to tell the spread by
+    with pytest.raises(BadInput, match="10 values do not split into 3 equal groups"):
+        group_standard_error([1.0] * 10, 3)
+
+
+def test_a_verdict_within_two_standard_errors_of_its_bound_is_the_seeds_luck():
+    inf = float("inf")
+    # mission1's mean distance at stop 43: 2.51 +- 0.30 against PX4's 2.76: inside, by luck
+    assert within_noise(2.51, 0.30, -inf, 2.76)
+    # its path shape: 0.60 +- 0.04 against 0.47, outside beyond doubt
+    assert not within_noise(0.60, 0.04, -inf, 0.47)
+    # a flight time, two-sided: the nearer bound decides
+    assert within_noise(42.66, 1.27, 38.02, 43.80)
+    assert not within_noise(40.0, 0.5, 38.0, 43.8)
+    assert within_noise(37.5, 0.3, 38.0, 43.8) and not within_noise(37.0, 0.3, 38.0, 43.8)
 
 
 def _leg_and_stop(bias_after_stop: tuple[float, float]) -> tuple[np.ndarray, ...]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -151,3 +152,16 @@ def test_a_px4_range_drawn_from_shared_noise_is_said_to_be_one(shared_data: Path
     run = _bench("--seeds", "3", "--plans", "mission2", data=shared_data)
     assert run.returncode == 1, run.stdout + run.stderr  # mission2's path shape: outside (0.60 vs 0.53)
     assert "note: these 4 PX4 flights share their noise" in " ".join(run.stdout.split())
+
+
+def test_each_built_in_mean_comes_with_its_standard_error_over_the_seeds(shared_data: Path) -> None:
+    """A researcher reading "inside PX4's range" must see how sure it is: each built-in-vs-PX4
+    mean carries its standard error over the seeds, and a verdict within two of them of PX4's
+    bound says so ("within noise")."""
+    run = _bench("--seeds", "3", "--plans", "mission1", data=shared_data)
+    cells = [row[1].strip() for row in _rows(run.stdout, "DTW per point")]
+    assert len(cells) == 1, run.stdout + run.stderr
+    assert re.fullmatch(r"\d+\.\d\d ± \d+\.\d\d \(\d+\.\d\d–\d+\.\d\d\)", cells[0]), cells[0]
+    caption = " ".join(run.stdout.split())
+    assert "mean ± one standard error over the seeds" in caption
+    assert "within 2 standard errors of PX4's bound" in caption
