@@ -6,6 +6,8 @@ pair of PX4 flights of that plan ("PX4 vs PX4": PX4's own run-to-run range) and 
 built-in flights ("built-in vs built-in": the replicas' spread). Each flight is measured from
 its lift-off point and resampled onto normalised time (``uavtest.analysis.fidelity``). Avoidance
 is off (the PX4 SIH flights had none). Target: every built-in-vs-PX4 mean inside PX4's range.
+Each built-in-vs-PX4 mean is printed with its standard error over the seeds, and a verdict within
+two of them of PX4's bound is marked "within noise": more seeds could turn it.
 
 Plans: the competition's mission1 and mission2 (``competition/snippets/case_studies``, their
 ``mission-params.csv``), PX4 logs run1-3 and sf1; its mission3, no shared PX4 log (only with
