@@ -520,8 +520,8 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
         ok &= theirs is None or cross.inside(theirs)
         t.add_row(f"{label}, {unit}", str(theirs or "—"), _with_error(cross, error), str(own or "—"), inside)
     ft_px4 = spread([f.flight_time for f in px4])
-    ft_ours = spread([f.flight_time for f in ours])
-    ft_error = ft_ours.std / math.sqrt(ft_ours.n)
+    times = [f.flight_time for f in ours]
+    ft_ours, ft_error = spread(times), group_standard_error(times, len(times))  # a seed each
     # two-sided: a mean flight time outside PX4's range is off either way
     ft_inside = ft_px4.low <= ft_ours.mean <= ft_px4.high
     ok &= len(px4) < 2 or ft_inside
