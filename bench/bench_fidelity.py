@@ -98,6 +98,7 @@ from uavtest.analysis.fidelity import (
     vertical_estimate_errors,
     within_noise,
 )
+from uavtest.analysis.liftoff import Liftoff, LiftoffSeries, liftoff_figures
 from uavtest.analysis.ulog import read_ulog, setpoint_changes, topic, trajectory_from_ulog
 from uavtest.analysis.waypoint_passes import (
     CornerExit,
@@ -108,7 +109,7 @@ from uavtest.analysis.waypoint_passes import (
     midleg_brakes,
 )
 from uavtest.errors import BadInput
-from uavtest.px4.modes import NavState
+from uavtest.px4.modes import ARMING_STATE_ARMED, NavState
 from uavtest.runner.events import MissionItemInt
 from uavtest.runner.progress import ProgressWatch
 from uavtest.sitl.geo import Projection
@@ -226,6 +227,8 @@ class Flights:
     position_errors: list[PositionErrors] = dataclasses.field(default_factory=list)
     #: per flight: the estimate's horizontal wander in the climb (``climb_wander``), m
     wander: list[float] = dataclasses.field(default_factory=list)
+    #: per flight with attitude ground truth: EKF2's tilt error, the kick and the setpoint at lift-off
+    liftoffs: list[Liftoff] = dataclasses.field(default_factory=list)
     #: per flight with attitude ground truth: (push, velocity error) at low speed
     push: list = dataclasses.field(default_factory=list)
     #: per flight with attitude ground truth: (heading error x speed, sideways velocity error)
@@ -337,6 +340,24 @@ def _measure(ulog: ULog, into: Flights) -> None:
             with contextlib.suppress(BadInput):  # never steady above 2 m/s for 2 s
                 into.turn.append(heading_turn_series(series, flown))
             into.legs += leg_start_response(series, changes)
+            status = ulog.get_dataset("vehicle_status").data
+            armed = np.flatnonzero(status["arming_state"] == ARMING_STATE_ARMED)
+            if ts is not None and len(armed):
+                takeoff = LiftoffSeries(
+                    float(status["timestamp"][armed[0]]) / 1e6,
+                    gt["timestamp"] / 1e6,
+                    gt["z"],
+                    at["timestamp"] / 1e6,
+                    quat[0],
+                    ag["timestamp"] / 1e6,
+                    quat[1],
+                    t,
+                    estimate[:, :2],
+                    ts["timestamp"] / 1e6,
+                    np.column_stack([ts["position[0]"], ts["position[1]"]]),
+                )
+                with contextlib.suppress(BadInput):  # armed in the air, or never rose
+                    into.liftoffs.append(liftoff_figures(takeoff))
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
     q = np.column_stack([att[f"q[{i}]"] for i in range(4)])
@@ -394,6 +415,15 @@ def _speed_errors(errors: list[SpeedErrors]) -> str:
 def _position_errors(errors: list[PositionErrors]) -> str:
     """Across the track; at rest: the mean over flights that have samples."""
     return f"{_finite_mean(errors, 'across'):.2f}; {_finite_mean(errors, 'rest'):.2f}"
+
+
+def _liftoffs(liftoffs: list[Liftoff]) -> str:
+    """Each lift-off figure's median (10th–90th percentile), and how many flights."""
+    cells = []
+    for values in zip(*liftoffs, strict=True):
+        p10, p50, p90 = np.percentile(values, (10, 50, 90))
+        cells.append(f"{p50:.2f} ({p10:.2f}–{p90:.2f})")
+    return "; ".join(cells) + f" ({len(liftoffs)} flights)"
 
 
 def _wander(wander: list[float]) -> str:
@@ -603,6 +633,15 @@ def table(name: str, px4_all: Flights, ours_all: Flights) -> tuple[Table, bool]:
             "item), median; p90, m",
             _wander(px4_all.wander),
             _wander(ours_all.wander),
+            "",
+            "",
+        )
+    if px4_all.liftoffs and ours_all.liftoffs:
+        t.add_row(
+            "lift-off: EKF2's tilt error before the release, °; the true tilt's peak after it, °; "
+            "the estimate off the takeoff setpoint 0.3 m up, m: median (p10–p90)",
+            _liftoffs(px4_all.liftoffs),
+            _liftoffs(ours_all.liftoffs),
             "",
             "",
         )
