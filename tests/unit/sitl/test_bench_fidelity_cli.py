@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from rich.console import Console
 
 from uavtest.analysis.fidelity import flight_figures, pairs_between, share_noise
 from uavtest.analysis.ulog import read_ulog, trajectory_from_ulog
@@ -165,3 +166,21 @@ def test_each_built_in_mean_comes_with_its_standard_error_over_the_seeds(shared_
     caption = " ".join(run.stdout.split())
     assert "mean ± one standard error over the seeds" in caption
     assert "within 2 standard errors of PX4's bound" in caption
+
+
+def test_the_lift_off_is_read_from_every_flight_with_attitude_ground_truth(bench_fidelity) -> None:
+    """The lift-off row (``analysis.liftoff``) is how the built-in's takeoff was held to 96 PX4
+    flights at stop 45: every flight logging SIH's attitude ground truth yields its three figures,
+    and the table prints them beside PX4's."""
+    ours, _ = bench_fidelity.builtin_flights(bench_fidelity.competition(1), 2)
+    assert len(ours.liftoffs) == 2
+    for f in ours.liftoffs:
+        assert 0.0 < f.tilt_error < 6.0, f  # PX4: 0.59-2.86 degrees, p10-p90
+        assert f.tilt_peak > 1.0, f  # the kick: PX4 3.8-17.2 degrees
+        assert 0.0 <= f.setpoint_offset < 1.5, f
+    table, _ = bench_fidelity.table("mission1", ours, ours)
+    console = Console(record=True, width=200)
+    console.print(table)
+    text = " ".join(console.export_text().split())
+    assert "lift-off: EKF2's tilt error before the release" in text
+    assert "(2 flights)" in text
