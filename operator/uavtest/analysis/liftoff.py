@@ -10,7 +10,8 @@ climb goes straight up from where the mission started). Pure functions over logg
 ``trajectory_setpoint``); ``bench/bench_fidelity.py`` prints them for PX4's flights and the
 built-in vehicle's side by side.
 
-96 PX4 v1.15 SIH flights of the competition missions flown here (2026-11-29, their ground truth):
+96 PX4 v1.15 SIH flights of the competition missions' plans flown here (mission2's also at 6 and
+8 m/s; 2026-11-29, their ground truth):
 EKF2's tilt error before the release 1.58 degrees (median; p10 0.59, p90 2.86), the true tilt's
 peak after it 8.2 (3.8-17.2), the estimate 0.20 m (p90 0.43) from the takeoff setpoint once the
 truth is 0.3 m up.

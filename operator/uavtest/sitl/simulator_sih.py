@@ -74,13 +74,14 @@ LIFTOFF_ACC_GAZEBO = 3.0
 #: busy attitude loop delays, narrows the body's tilt to 0.1-0.5 s): the tilt then peaks at 8.6
 #: degrees (median, estimated; the shared logs 6.9, these 24 flights 10.1), the vehicle moves 0.30 m
 #: within 3 s and is 0.34 / 0.40 / 0.46 m off its takeoff point at 4 / 6 / 8 m up (PX4 0.28 / 0.40 /
-#: 0.41). Measured again on 96 PX4 flights of the same missions' plans (2026-11-29, stop 45) the same way for
-#: both (``analysis.liftoff``: the true tilt's peak from 0.3 s before to 1 s after the truth rose 2 cm)
-#: PX4's peak is 8.2 degrees (median; 3.8-17.2 p10-p90), its truth 0.21 / 0.30 / 0.36 m off 0.67 /
-#: 1.5 / 3 s after the release, and its estimate 0.20 m (p90 0.43) from the takeoff setpoint 0.3 m
-#: up; at 2.5 (with ``ekf2.TILT_SIGMA_ARMED`` 2.3 degrees) the built-in's were 11.3 (3.3-19.2), 0.31 /
-#: 0.42 / 0.42 m and 0.31 (0.58) over 100 seeds, and its climb wandered 0.45 m (p90 0.75; PX4 0.37,
-#: 0.52); at 2.0 (and 1.75 degrees) 8.5 (3.1-13.7), 0.23 / 0.33 / 0.37, 0.22 (0.43) and 0.35 (0.59)
+#: 0.41). Measured again at stop 45 (2026-11-29) on 96 PX4 flights of the same missions' plans,
+#: both read the same way (``analysis.liftoff``: the true tilt's peak from 0.3 s before to 1 s after
+#: the truth rose 2 cm): PX4's peak is 8.2 degrees (median; 3.8-17.2 p10-p90), its truth 0.21 / 0.30 /
+#: 0.36 m off 0.67 / 1.5 / 3 s after the release, its estimate 0.20 m (p90 0.43) from the takeoff
+#: setpoint 0.3 m up. At 2.5 (with ``ekf2.TILT_SIGMA_ARMED`` 2.3 degrees) the built-in's were 11.3
+#: (3.3-19.2), 0.31 / 0.42 / 0.42 m and 0.31 (0.58) over 100 seeds, and its climb wandered 0.45 m
+#: (p90 0.75; PX4 0.37, 0.52); at 2.0 (and 1.75 degrees) 8.5 (3.1-13.7), 0.23 / 0.33 / 0.37, 0.22
+#: (0.43) and 0.35 (0.59)
 KICK_GAIN = 2.0  # 1/s: peak tilt (rad) per rad-second of wound-up tilt command
 KICK_TAU = 0.3  # s
 KICK_END = 2.0  # s after the release
