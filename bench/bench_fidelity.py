@@ -98,7 +98,7 @@ from uavtest.analysis.fidelity import (
     vertical_estimate_errors,
     within_noise,
 )
-from uavtest.analysis.liftoff import Liftoff, LiftoffSeries, liftoff_figures
+from uavtest.analysis.liftoff import Liftoff, Takeoff, liftoff_figures
 from uavtest.analysis.ulog import read_ulog, setpoint_changes, topic, trajectory_from_ulog
 from uavtest.analysis.waypoint_passes import (
     CornerExit,
@@ -340,24 +340,18 @@ def _measure(ulog: ULog, into: Flights) -> None:
             with contextlib.suppress(BadInput):  # never steady above 2 m/s for 2 s
                 into.turn.append(heading_turn_series(series, flown))
             into.legs += leg_start_response(series, changes)
-            status = ulog.get_dataset("vehicle_status").data
-            armed = np.flatnonzero(status["arming_state"] == ARMING_STATE_ARMED)
+            status = topic(ulog, "vehicle_status")
+            armed = [] if status is None else np.flatnonzero(status["arming_state"] == ARMING_STATE_ARMED)
             if ts is not None and len(armed):
-                takeoff = LiftoffSeries(
+                takeoff = Takeoff(
                     float(status["timestamp"][armed[0]]) / 1e6,
-                    gt["timestamp"] / 1e6,
                     gt["z"],
-                    at["timestamp"] / 1e6,
-                    quat[0],
-                    ag["timestamp"] / 1e6,
-                    quat[1],
-                    t,
                     estimate[:, :2],
                     ts["timestamp"] / 1e6,
                     np.column_stack([ts["position[0]"], ts["position[1]"]]),
                 )
                 with contextlib.suppress(BadInput):  # armed in the air, or never rose
-                    into.liftoffs.append(liftoff_figures(takeoff))
+                    into.liftoffs.append(liftoff_figures(series, takeoff))
     sp = ulog.get_dataset("vehicle_local_position_setpoint").data
     thrust = np.column_stack([sp[f"thrust[{i}]"] for i in range(3)])
     q = np.column_stack([att[f"q[{i}]"] for i in range(4)])

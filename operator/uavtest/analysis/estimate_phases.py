@@ -77,6 +77,7 @@ __all__ = [
     "leg_start_means",
     "leg_start_response",
     "position_errors_by_phase",
+    "tilt_offset",
     "tilt_push_response",
     "tilt_push_series",
 ]
@@ -231,15 +232,22 @@ def _truth_and_error(flight: VelocityAttitude, g: np.ndarray) -> tuple[np.ndarra
     return vt, errors_on(g, flight.t, flight.velocity, flight.t_truth, flight.truth_velocity, 2)
 
 
+def tilt_offset(flight: VelocityAttitude, g: np.ndarray) -> np.ndarray:
+    """(N, 2): EKF2's tilt error at times ``g``, the estimated body z axis's horizontal components
+    less the true one's (quaternions interpolated component-wise: their samples are milliseconds
+    apart)."""
+    est = np.column_stack([np.interp(g, flight.t_att, flight.q[:, i]) for i in range(4)])
+    tru = np.column_stack([np.interp(g, flight.t_att_truth, flight.q_truth[:, i]) for i in range(4)])
+    return body_z_from_quaternion(est) - body_z_from_quaternion(tru)
+
+
 def tilt_push_series(flight: VelocityAttitude, window: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
     """One flight's (push, velocity error) samples, both axes, where the true speed is below
     ``SLOW_SPEED`` within ``window``, each about its mean. The push is -g x the body z axis's
     horizontal offset (estimate minus truth), leaky-integrated over ``PUSH_TAU``: a tilt error
     towards north hides a push towards south. A flight with no slow stretch of 2 s raises ``BadInput``."""
     g = _grid(window, "tilt push")
-    est = np.column_stack([np.interp(g, flight.t_att, flight.q[:, i]) for i in range(4)])
-    tru = np.column_stack([np.interp(g, flight.t_att_truth, flight.q_truth[:, i]) for i in range(4)])
-    offset = body_z_from_quaternion(est) - body_z_from_quaternion(tru)
+    offset = tilt_offset(flight, g)
     # push[i] = a push[i-1] - g offset[i] / RATE, push[0] = 0: at rest at the window's start
     a = np.exp(-1.0 / (RATE * PUSH_TAU))
     drive = offset.copy()

@@ -7,14 +7,13 @@ torque stored and overshoots (``simulator_sih.KICK_GAIN``, ``ekf2.TILT_*``). Whe
 when the vehicle has risen decides how far the climb wanders from the takeoff setpoint (Mission's
 climb goes straight up from where the mission started). Pure functions over logged arrays
 (``vehicle_attitude`` and its ground truth, ``vehicle_local_position`` and its ground truth,
-``trajectory_setpoint``); ``bench/bench_fidelity.py`` prints them for PX4's flights and the
-built-in vehicle's side by side.
+``trajectory_setpoint``: ``estimate_phases.VelocityAttitude`` and a ``Takeoff``);
+``bench/bench_fidelity.py`` prints them for PX4's flights and the built-in vehicle's side by side.
 
 96 PX4 v1.15 SIH flights of the competition missions' plans flown here (mission2's also at 6 and
-8 m/s; 2026-11-29, their ground truth):
-EKF2's tilt error before the release 1.58 degrees (median; p10 0.59, p90 2.86), the true tilt's
-peak after it 8.2 (3.8-17.2), the estimate 0.20 m (p90 0.43) from the takeoff setpoint once the
-truth is 0.3 m up.
+8 m/s; 2026-11-29, their ground truth): EKF2's tilt error before the release 1.58 degrees (median;
+p10 0.59, p90 2.86), the true tilt's peak after it 8.2 (3.8-17.2), the estimate 0.20 m (p90 0.43)
+from the takeoff setpoint once the truth is 0.3 m up.
 """
 
 from __future__ import annotations
@@ -24,6 +23,7 @@ from typing import NamedTuple
 import numpy as np
 
 from uavtest.analysis.attitude_response import body_z_from_quaternion
+from uavtest.analysis.estimate_phases import VelocityAttitude, tilt_offset
 from uavtest.errors import BadInput
 
 __all__ = [
@@ -33,7 +33,7 @@ __all__ = [
     "RISEN",
     "TILT_MEAN_S",
     "Liftoff",
-    "LiftoffSeries",
+    "Takeoff",
     "liftoff_figures",
 ]
 
@@ -44,22 +44,14 @@ PEAK_BEFORE = 0.3  # s: the true tilt's peak is sought from this long before the
 PEAK_AFTER = 1.0  # s: to this long after it
 
 
-class LiftoffSeries(NamedTuple):
-    """One flight's logged series around its takeoff, each with its own timestamps (s).
-
-    ``armed_at``: when it armed; ``t_truth`` / ``z_truth``: the true altitude (NED down);
-    ``t_att`` / ``q``, ``t_att_truth`` / ``q_truth``: estimated and true attitude (N, 4: w, x, y,
-    z); ``t`` / ``xy``: the estimated horizontal position (N, 2); ``t_sp`` / ``sp_xy``: the
-    trajectory setpoint's horizontal position (N, 2; NaN where it sets none)."""
+class Takeoff(NamedTuple):
+    """What a takeoff adds to a flight's ``VelocityAttitude``: ``armed_at`` (s), when it armed;
+    ``z_truth``: the true altitude (NED down) at the flight's ``t_truth``; ``xy``: the estimated
+    horizontal position (N, 2) at its ``t``; ``t_sp`` / ``sp_xy``: the trajectory setpoint's
+    horizontal position (N, 2; NaN where it sets none) and its timestamps (s)."""
 
     armed_at: float
-    t_truth: np.ndarray
     z_truth: np.ndarray
-    t_att: np.ndarray
-    q: np.ndarray
-    t_att_truth: np.ndarray
-    q_truth: np.ndarray
-    t: np.ndarray
     xy: np.ndarray
     t_sp: np.ndarray
     sp_xy: np.ndarray
@@ -85,28 +77,23 @@ def _crossing(t: np.ndarray, rise: np.ndarray, after: float, height: float, what
     return float(t[i[0]])
 
 
-def liftoff_figures(s: LiftoffSeries) -> Liftoff:
+def liftoff_figures(flight: VelocityAttitude, takeoff: Takeoff) -> Liftoff:
     """The lift-off's three figures (``Liftoff``). A flight whose truth never rose ``RISEN`` after
     arming, or that set no horizontal setpoint by then, raises ``BadInput``."""
-    rise = np.interp(s.armed_at, s.t_truth, s.z_truth) - s.z_truth
-    released = _crossing(s.t_truth, rise, s.armed_at, RELEASE_RISE, "release")
-    risen = _crossing(s.t_truth, rise, s.armed_at, RISEN, "risen")
-    g = np.linspace(released - TILT_MEAN_S, released, 26)
-    lean = _on(g, s.t_att, s.q) - _on(g, s.t_att_truth, s.q_truth)
+    t_truth, z_truth = flight.t_truth, takeoff.z_truth
+    rise = np.interp(takeoff.armed_at, t_truth, z_truth) - z_truth
+    released = _crossing(t_truth, rise, takeoff.armed_at, RELEASE_RISE, "release")
+    risen = _crossing(t_truth, rise, takeoff.armed_at, RISEN, "risen")
+    lean = tilt_offset(flight, np.linspace(released - TILT_MEAN_S, released, 26))
     tilt_error = float(np.degrees(np.hypot(*lean.mean(axis=0))))
-    window = (s.t_att_truth >= released - PEAK_BEFORE) & (s.t_att_truth <= released + PEAK_AFTER)
+    t_att = flight.t_att_truth
+    window = (t_att >= released - PEAK_BEFORE) & (t_att <= released + PEAK_AFTER)
     if not window.any():
         raise BadInput("lift-off: no true attitude logged around the release")
-    horizontal = np.hypot(*body_z_from_quaternion(s.q_truth[window]).T)
+    horizontal = np.hypot(*body_z_from_quaternion(flight.q_truth[window]).T)
     tilt_peak = float(np.degrees(np.arcsin(np.clip(horizontal.max(), 0.0, 1.0))))
-    set_ = np.flatnonzero(np.isfinite(s.sp_xy).all(axis=1) & (s.t_sp <= risen))
+    set_ = np.flatnonzero(np.isfinite(takeoff.sp_xy).all(axis=1) & (takeoff.t_sp <= risen))
     if not len(set_):
         raise BadInput("lift-off: no horizontal setpoint before the vehicle rose")
-    here = np.array([np.interp(risen, s.t, s.xy[:, i]) for i in range(2)])
-    return Liftoff(tilt_error, tilt_peak, float(np.hypot(*(here - s.sp_xy[set_[-1]]))))
-
-
-def _on(g: np.ndarray, t: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """(N, 2): the body z axis's horizontal components at times ``g`` (quaternions interpolated
-    component-wise: their samples are milliseconds apart)."""
-    return body_z_from_quaternion(np.column_stack([np.interp(g, t, q[:, i]) for i in range(4)]))
+    here = np.array([np.interp(risen, flight.t, takeoff.xy[:, i]) for i in range(2)])
+    return Liftoff(tilt_error, tilt_peak, float(np.hypot(*(here - takeoff.sp_xy[set_[-1]]))))

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from uavtest.analysis.liftoff import RELEASE_RISE, LiftoffSeries, liftoff_figures
+from uavtest.analysis.estimate_phases import VelocityAttitude
+from uavtest.analysis.liftoff import RELEASE_RISE, Takeoff, liftoff_figures
 from uavtest.errors import BadInput
 
 ARMED_AT = 2.0
@@ -28,7 +29,7 @@ def _flight(
     rise_rate: float = 0.5,
     setpoint: tuple[float, float] = (0.0, 0.0),
     lean_in_air: bool = True,
-) -> LiftoffSeries:
+) -> tuple[VelocityAttitude, Takeoff]:
     """On the ground from 0 s, armed at 2 s, let go at 6 s and rising ``rise_rate`` m/s; EKF2's
     body leans ``lean_deg`` north of the (level) truth; the truth's tilt peaks at ``kick_deg`` 0.25 s
     after the release; the estimate slides linearly to ``estimate_at_risen`` by the time the truth
@@ -45,23 +46,13 @@ def _flight(
     sp[t >= ARMED_AT] = setpoint
     # once the truth has risen RELEASE_RISE (what the analysis calls the release)
     lean = np.where(lean_in_air | (t <= RELEASE + RELEASE_RISE / rise_rate), lean_deg, 0.0)
-    return LiftoffSeries(
-        ARMED_AT,
-        t,
-        z_truth,
-        t,
-        _tilted(t, lean + kick),
-        t,
-        _tilted(t, kick),
-        t,
-        xy,
-        t,
-        sp,
-    )
+    still = np.zeros((len(t), 2))  # the velocities: not read at lift-off
+    flight = VelocityAttitude(t, still, t, still, t, _tilted(t, lean + kick), t, _tilted(t, kick))
+    return flight, Takeoff(ARMED_AT, z_truth, xy, t, sp)
 
 
 def test_the_lift_off_reads_the_tilt_error_the_kick_and_where_the_estimate_rose() -> None:
-    f = liftoff_figures(_flight())
+    f = liftoff_figures(*_flight())
     assert f.tilt_error == pytest.approx(2.0, abs=0.01)
     assert f.tilt_peak == pytest.approx(9.0, abs=0.1)
     assert f.setpoint_offset == pytest.approx(0.5, abs=0.01)
@@ -69,29 +60,29 @@ def test_the_lift_off_reads_the_tilt_error_the_kick_and_where_the_estimate_rose(
 
 def test_the_tilt_error_is_taken_before_the_release_not_in_the_kick() -> None:
     # EKF2 has the truth's tilt once the body is let go: the error is the one it stood with
-    f = liftoff_figures(_flight(lean_deg=1.0, kick_deg=15.0, lean_in_air=False))
+    f = liftoff_figures(*_flight(lean_deg=1.0, kick_deg=15.0, lean_in_air=False))
     assert f.tilt_error == pytest.approx(1.0, abs=0.01)
     assert f.tilt_peak == pytest.approx(15.0, abs=0.2)
 
 
 def test_the_offset_is_from_the_setpoint_in_force_not_the_origin() -> None:
-    f = liftoff_figures(_flight(estimate_at_risen=(0.3, 0.4), setpoint=(0.3, 0.0)))
+    f = liftoff_figures(*_flight(estimate_at_risen=(0.3, 0.4), setpoint=(0.3, 0.0)))
     assert f.setpoint_offset == pytest.approx(0.4, abs=0.01)
 
 
 def test_a_level_release_has_no_peak_and_no_error() -> None:
-    f = liftoff_figures(_flight(lean_deg=0.0, kick_deg=0.0, estimate_at_risen=(0.0, 0.0)))
+    f = liftoff_figures(*_flight(lean_deg=0.0, kick_deg=0.0, estimate_at_risen=(0.0, 0.0)))
     assert f == pytest.approx((0.0, 0.0, 0.0), abs=1e-6)
 
 
 def test_a_vehicle_that_never_rose_is_bad_input_not_a_zero() -> None:
-    flight = _flight()
-    grounded = flight._replace(z_truth=np.zeros_like(flight.z_truth))
+    flight, takeoff = _flight()
+    grounded = takeoff._replace(z_truth=np.zeros_like(takeoff.z_truth))
     with pytest.raises(BadInput, match="never rose"):
-        liftoff_figures(grounded)
+        liftoff_figures(flight, grounded)
 
 
 def test_a_flight_with_no_setpoint_before_it_rose_is_bad_input() -> None:
-    flight = _flight()
+    flight, takeoff = _flight()
     with pytest.raises(BadInput, match="no horizontal setpoint"):
-        liftoff_figures(flight._replace(sp_xy=np.full_like(flight.sp_xy, math.nan)))
+        liftoff_figures(flight, takeoff._replace(sp_xy=np.full_like(takeoff.sp_xy, math.nan)))
