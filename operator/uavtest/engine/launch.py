@@ -107,7 +107,14 @@ def start_exec(
 
 
 class ExecLauncher:
-    """Every command exec'd with ``subprocess`` (cold start-up each time)."""
+    """Every command exec'd with ``subprocess`` (cold start-up each time).
+
+    ``environ``: the environment of the uavtest processes it starts (``engine.bytecode``); None
+    inherits this one. Other commands (PX4) get their own ``env`` or inherit.
+    """
+
+    def __init__(self, environ: dict[str, str] | None = None) -> None:
+        self._environ = environ
 
     def start(
         self,
@@ -118,6 +125,8 @@ class ExecLauncher:
         cwd: Path | None = None,
         env: dict[str, str] | None = None,
     ) -> Started:
+        if env is None and self._environ is not None and is_uavtest_cli(argv):
+            env = self._environ
         return start_exec(argv, stdout=stdout, stderr=stderr, cwd=cwd, env=env)
 
 

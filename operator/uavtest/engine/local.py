@@ -10,6 +10,7 @@ import importlib
 import os
 import secrets
 import threading
+import time
 from concurrent.futures import Future, ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
@@ -25,6 +26,7 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 from rich.table import Table
 
 from uavtest.analysis.models import ReplicaResult, RunSummary
+from uavtest.engine.bytecode import replica_environ
 from uavtest.engine.launch import ExecLauncher, Launcher, WarmLauncher
 from uavtest.engine.ports import PX4_MAX_INSTANCES, PortAllocator
 from uavtest.engine.replica import DEFAULT_RETRIES, ReplicaJob, run_replica
@@ -45,6 +47,7 @@ __all__ = [
     "new_run_id",
     "preflight",
     "run_local",
+    "wait_for_first_line",
 ]
 
 NAMESPACE = "local"
@@ -254,11 +257,30 @@ def _launcher(settings: EngineSettings, px4_bin: Path | None, replicas: int) -> 
         warm = WarmLauncher()
         warm.warm()  # the server imports while the engine prepares the replicas
         return warm
-    return ExecLauncher()
+    # processes started cold compile uavtest each time unless it has bytecode (engine.bytecode)
+    return ExecLauncher(environ=replica_environ())
 
 
-def _import_aggregation() -> None:
-    """Import what aggregation needs (matplotlib) while the replicas fly, not after them."""
+def wait_for_first_line(log: Path, wait_s: float, poll_s: float = 0.05) -> bool:
+    """Wait until a process has written a line to ``log`` (beyond the attempt header); False
+    when ``wait_s`` passed first."""
+    deadline = time.monotonic() + wait_s
+    while not _last_line(log):
+        if time.monotonic() >= deadline:
+            return False
+        time.sleep(poll_s)
+    return True
+
+
+def _import_aggregation(after: Path | None = None, wait_s: float = 10.0) -> None:
+    """Import what aggregation needs (matplotlib) while the replicas fly, not after them.
+
+    ``after``: a runner's log; the import waits until that runner has logged its first line
+    (at most ``wait_s``): processes started cold import for about a second, and this import
+    would take a core from them on a 2-core machine, while the lockstep flight leaves one free.
+    """
+    if after is not None:
+        wait_for_first_line(after, wait_s)
     for module in ("uavtest.engine.aggregate", "uavtest.analysis.plots"):
         importlib.import_module(module)
 
@@ -341,7 +363,11 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
         highlight=False,
     )
     board = _Board({j.index: j.seed for j in jobs}, {j.index: j.out_dir / "runner.stderr.log" for j in jobs})
-    threading.Thread(target=_import_aggregation, name="import-aggregation", daemon=True).start()
+    # cold-started replica processes import first; forked ones (warm server) have already
+    first_log = jobs[0].out_dir / "runner.stderr.log" if isinstance(launcher, ExecLauncher) else None
+    threading.Thread(
+        target=_import_aggregation, args=(first_log,), name="import-aggregation", daemon=True
+    ).start()
     _fly_all(jobs, parallel, store, launcher, board, console)
 
     summary = aggregate_run(store, NAMESPACE, name, run_id, indices, spec)

@@ -78,3 +78,18 @@ def test_px4_without_binary_names_the_env_var(tmp_path: Path, monkeypatch: pytes
 def test_missing_test_file(tmp_path: Path) -> None:
     with pytest.raises(MissingFile):
         run_local(RunOptions(test=tmp_path / "absent.yaml", out=tmp_path / "runs"))
+
+
+def test_waiting_for_a_runner_ends_at_its_first_line_or_gives_up(tmp_path: Path) -> None:
+    import threading
+
+    from uavtest.engine.local import wait_for_first_line
+
+    log = tmp_path / "runner.stderr.log"
+    log.write_text("--- attempt 1 ---\n")
+    assert not wait_for_first_line(log, wait_s=0.2)  # the header alone is not a line of the runner
+    timer = threading.Timer(0.2, lambda: log.write_text("--- attempt 1 ---\nINFO: store: here\n"))
+    timer.start()
+    assert wait_for_first_line(log, wait_s=30.0)
+    timer.join()
+    assert not wait_for_first_line(tmp_path / "absent.log", wait_s=0.1)
