@@ -122,7 +122,8 @@ def run(
     the test then. Errored replicas are retried twice with the same seed first.
 
     Artifacts: OUT/local/<test>/<run-id>/replica-<i>/ and .../aggregate/. Environment:
-    UAVTEST_PX4_BIN (PX4 SITL binary for vehicle.simulator px4), UAVTEST_LAUNCH=fork|exec.
+    UAVTEST_PX4_BIN (PX4 SITL binary for vehicle.simulator px4), UAVTEST_LAUNCH=fork|exec,
+    UAVTEST_PYCACHE=off|DIR (bytecode of replica processes started cold, see the README).
 
     --engine kubernetes creates a new UavTest and follows its status (same exit codes); --out then
     downloads the run's artifacts to OUT/<namespace>/<test>/<run-id>/ with the operator's S3
