@@ -257,8 +257,10 @@ def _launcher(settings: EngineSettings, px4_bin: Path | None, replicas: int) -> 
         warm = WarmLauncher()
         warm.warm()  # the server imports while the engine prepares the replicas
         return warm
-    # processes started cold compile uavtest each time unless it has bytecode (engine.bytecode)
-    return ExecLauncher(environ=replica_environ())
+    # processes started cold compile uavtest each time unless it has bytecode (engine.bytecode);
+    # not beside PX4, which is not in lockstep: a runner that connects sooner talks to it earlier
+    # in its boot, and PX4 at its speed factor on 2 cores then misses commands (the CP test)
+    return ExecLauncher(environ=replica_environ() if px4_bin is None else None)
 
 
 def wait_for_first_line(log: Path, wait_s: float, poll_s: float = 0.05) -> bool:
@@ -363,8 +365,10 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
         highlight=False,
     )
     board = _Board({j.index: j.seed for j in jobs}, {j.index: j.out_dir / "runner.stderr.log" for j in jobs})
-    # cold-started replica processes import first; forked ones (warm server) have already
-    first_log = jobs[0].out_dir / "runner.stderr.log" if isinstance(launcher, ExecLauncher) else None
+    # cold-started built-in replicas import first (forked ones have already). PX4 is not in
+    # lockstep: the import runs during its boot, as a core taken from it mid-flight changes it
+    cold = isinstance(launcher, ExecLauncher) and px4_bin is None
+    first_log = jobs[0].out_dir / "runner.stderr.log" if cold else None
     threading.Thread(
         target=_import_aggregation, args=(first_log,), name="import-aggregation", daemon=True
     ).start()

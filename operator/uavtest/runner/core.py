@@ -145,6 +145,9 @@ class FlightReport:
     refusals: list[Refusal] = field(default_factory=list)  # commands the vehicle refused
     faults: list[FaultRecord] = field(default_factory=list)  # faults injected, with their ACKs
     grants: int = 0
+    #: the longest the runner fell behind the vehicle (vehicle ms between the oldest and the newest
+    #: position of one batch of datagrams read at once), with a range sensor to feed
+    scan_backlog_ms: int = 0
     log_data: bytes | None = None
     flight_wall: tuple[float, float] | None = None  # wall clock at the flight stage's start and end
 
@@ -153,6 +156,10 @@ class FlightReport:
         if self.start_ms is None or self.end_ms is None:
             return None
         return (self.end_ms - self.start_ms) / 1000.0
+
+
+SCAN_STALE_MS = 500  # PX4's CollisionPrevention RANGE_STREAM_TIMEOUT_US
+SCAN_STALE_WARNING = "the runner fell"
 
 
 class ReplicaCore:
@@ -182,6 +189,8 @@ class ReplicaCore:
         self.obstacle_feed = (
             ObstacleDistanceFeed(config.range_sensor, config.obstacles) if config.range_sensor else None
         )
+        self._scan_from: LocalPosition | None = None  # the batch's newest position, to scan from
+        self._batch_first_ms: int | None = None  # the batch's oldest position (vehicle ms)
         self._have_local = False
         self._have_global = False
         self._waiting_at: int | None = None  # a lockstep announce not yet granted
@@ -311,10 +320,27 @@ class ReplicaCore:
         elif p.time_ms < self.now_ms - JITTER_MS and self.stage in _REBOOT_WATCHED:
             return self._rebooted(p.time_ms, wall)
         if self.obstacle_feed is not None and self.stage is not Stage.DONE:
-            scan = self.obstacle_feed.on_position(p.time_ms, p.x, p.y, p.z)
-            if scan is not None:
-                return [scan, *self._position_step(p, wall)]
+            self._scan_from = p  # scanned once the batch is read (``end_batch``)
+            if self._batch_first_ms is None:
+                self._batch_first_ms = p.time_ms
         return self._position_step(p, wall)
+
+    def end_batch(self, wall: float) -> list[Outgoing]:
+        """After the messages of one read: the range sensor's scan, from the newest position.
+
+        A runner that fell behind (PX4 at a high speed factor on a busy machine) reads many
+        positions at once; scanning from each in turn would hand PX4's Collision Prevention
+        scans from where the vehicle was, stamped by PX4 as new. One scan from the newest
+        position keeps them as fresh as the runner can; how far behind it fell is reported."""
+        p, self._scan_from = self._scan_from, None
+        first, self._batch_first_ms = self._batch_first_ms, None
+        if p is None or self.obstacle_feed is None or self.stage is Stage.DONE:
+            return []
+        backlog = p.time_ms - first if first is not None and self.stage is Stage.FLIGHT else 0
+        if backlog > self.report.scan_backlog_ms:  # before the flight: what queued while connecting
+            self.report.scan_backlog_ms = backlog
+        scan = self.obstacle_feed.on_position(p.time_ms, p.x, p.y, p.z)
+        return [scan] if scan is not None else []
 
     def _position_step(self, p: LocalPosition, wall: float) -> list[Outgoing]:
         """A position's work for the stage: the flight's checks and step, or the connection."""
@@ -574,6 +600,14 @@ class ReplicaCore:
         rep.delays = list(self.scheduler.warnings)
         rep.refusals = list(self.scheduler.refusals)
         rep.faults = list(self.scheduler.faults)
+        stale_told = any(w.startswith(SCAN_STALE_WARNING) for w in rep.warnings)
+        if rep.scan_backlog_ms > SCAN_STALE_MS and not stale_told:
+            rep.warnings.append(
+                f"{SCAN_STALE_WARNING} up to {rep.scan_backlog_ms / 1000:.1f} s of vehicle time "
+                "behind the vehicle (its messages read in one backlog): its range sensor's scans "
+                f"were that old, and PX4 drops OBSTACLE_DISTANCE older than {SCAN_STALE_MS / 1000:g} s "
+                "(Collision Prevention then holds the vehicle); a lower vehicle.speedFactor keeps up"
+            )
 
     def _send_disarm(self, wall: float) -> list[Outgoing]:
         self._settle_tries += 1

@@ -23,7 +23,7 @@ def drive(
     tick_s: float = 0.02,
 ) -> FlightReport:
     """Run the core over the link until it is done; returns its report."""
-    send, receive, handle, tick = link.send, link.receive, core.handle, core.tick
+    send, receive, handle, tick, end_batch = link.send, link.receive, core.handle, core.tick, core.end_batch
     now = clock()
     send(core.start(now))
     next_tick = now
@@ -45,4 +45,7 @@ def drive(
                 send(out)
             if core.done:
                 break
+        out = end_batch(now)
+        if out:
+            send(out)
     return core.report

@@ -5,14 +5,14 @@ from __future__ import annotations
 import itertools
 import math
 
-from uavtest.runner.core import CoreConfig, ReplicaCore
+from uavtest.runner.core import CoreConfig, ReplicaCore, Stage
 from uavtest.runner.events import Attitude, CommandLong, LocalPosition, ObstacleDistance, Outgoing
 from uavtest.runner.obstacle_distance import ObstacleDistanceFeed
 from uavtest.runner.plan import plan_flight
 from uavtest.runner.streams import ATTITUDE_INTERVAL_US
 from uavtest.spec.models import Obstacle, RangeSensor, UavTestSpec
 
-from .vehicle import boot
+from .vehicle import ScriptedVehicle, boot, exchange
 
 #: a wall 2 m thick across the way North, its face at x = 10 m, 20 m wide, 30 m high
 WALL = Obstacle.model_validate({"size": {"l": 2, "w": 20, "h": 30}, "position": {"x": 11, "y": 0, "z": 0}})
@@ -87,13 +87,14 @@ def test_px4_tests_with_a_range_sensor_get_the_runners_scans_and_the_builtin_its
 
 
 def _connected(config: CoreConfig) -> tuple[ReplicaCore, list[Outgoing]]:
+    """Connected, each message read on its own (a runner that keeps up)."""
     core = ReplicaCore(config)
     core.start(0.0)
     core.handle(Attitude(900, 0.0), 0.1)
     out: list[Outgoing] = []
     for msg in boot(1000):
-        out += core.handle(msg, 0.1)
-    out += core.handle(LocalPosition(1200, 4.0, 0.0, -5.0), 0.2)
+        out += core.handle(msg, 0.1) + core.end_batch(0.1)
+    out += core.handle(LocalPosition(1200, 4.0, 0.0, -5.0), 0.2) + core.end_batch(0.2)
     return core, out
 
 
@@ -108,3 +109,31 @@ def test_the_core_keeps_attitude_and_sends_scans_from_the_first_position() -> No
     assert not any(isinstance(m, ObstacleDistance) for m in out)
     asks = {int(m.params[0]): m.params[1] for m in out if isinstance(m, CommandLong) and m.command == 511}
     assert asks[30] == -1.0  # without a sensor to simulate: stopped, as before
+
+
+def test_a_backlog_read_at_once_gets_one_scan_from_its_newest_position_and_a_warning() -> None:
+    """PX4 at a high speed factor on a busy machine: the runner reads 2 s of positions at once.
+    Scanning each would hand PX4 scans from where the vehicle was (PX4 stamps them new); one
+    scan from the newest position, and the backlog said in the result."""
+    core = ReplicaCore(CoreConfig(obstacles=[WALL], range_sensor=RangeSensor(), commands=[]))
+    vehicle = ScriptedVehicle()
+    core.start(0.0)
+    core.handle(Attitude(900, 0.0), 0.1)
+    exchange(core, vehicle, boot(35_000), wall=0.1)
+    assert core.stage is Stage.FLIGHT
+    core.end_batch(0.1)  # what queued while connecting is not a backlog of the flight
+    assert core.report.scan_backlog_ms == 0
+    out: list[Outgoing] = []
+    for k in range(1, 41):  # 0 -> 7.8 m North toward the wall's face at 10 m, 50 ms apart
+        out += core.handle(LocalPosition(35_000 + 50 * k, 0.2 * (k - 1), 0.0, -5.0), 1.0)
+    scans = [m for m in [*out, *core.end_batch(1.0)] if isinstance(m, ObstacleDistance)]
+    assert [s.time_usec for s in scans] == [37_000_000]  # one, from the newest position
+    assert scans[0].distances[0] == 220  # 10 - 7.8 m ahead, not 10 m from where it started
+    assert core.report.scan_backlog_ms == 1950
+    core.handle(LocalPosition(37_050, 7.8, 0.0, -5.0), 1.1)
+    core.end_batch(1.1)  # read on its own: no backlog, the worst one kept
+    assert core.report.scan_backlog_ms == 1950
+    core._snapshot()
+    core._snapshot()
+    [warning] = [w for w in core.report.warnings if w.startswith("the runner fell")]
+    assert "up to 1.9 s of vehicle time behind" in warning and "vehicle.speedFactor" in warning
