@@ -258,8 +258,8 @@ def _launcher(settings: EngineSettings, px4_bin: Path | None, replicas: int) -> 
         warm.warm()  # the server imports while the engine prepares the replicas
         return warm
     # processes started cold compile uavtest each time unless it has bytecode (engine.bytecode);
-    # not beside PX4, which is not in lockstep: a runner that connects sooner talks to it earlier
-    # in its boot, and PX4 at its speed factor on 2 cores then misses commands (the CP test)
+    # not for PX4 replicas: PX4's boot (~35 s of its clock) dominates their start-up, and a runner
+    # ready sooner would only meet PX4 earlier in its boot, which was not shown to be harmless
     return ExecLauncher(environ=replica_environ() if px4_bin is None else None)
 
 

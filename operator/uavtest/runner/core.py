@@ -336,8 +336,9 @@ class ReplicaCore:
         first, self._batch_first_ms = self._batch_first_ms, None
         if p is None or self.obstacle_feed is None or self.stage is Stage.DONE:
             return []
+        # before the flight a read holds what queued while connecting: not a backlog
         backlog = p.time_ms - first if first is not None and self.stage is Stage.FLIGHT else 0
-        if backlog > self.report.scan_backlog_ms:  # before the flight: what queued while connecting
+        if backlog > self.report.scan_backlog_ms:
             self.report.scan_backlog_ms = backlog
         scan = self.obstacle_feed.on_position(p.time_ms, p.x, p.y, p.z)
         return [scan] if scan is not None else []
@@ -604,7 +605,7 @@ class ReplicaCore:
         if rep.scan_backlog_ms > SCAN_STALE_MS and not stale_told:
             rep.warnings.append(
                 f"{SCAN_STALE_WARNING} up to {rep.scan_backlog_ms / 1000:.1f} s of vehicle time "
-                "behind the vehicle (its messages read in one backlog): its range sensor's scans "
+                "behind the vehicle (that much of its messages read at once): its range sensor's scans "
                 f"were that old, and PX4 drops OBSTACLE_DISTANCE older than {SCAN_STALE_MS / 1000:g} s "
                 "(Collision Prevention then holds the vehicle); a lower vehicle.speedFactor keeps up"
             )
