@@ -159,7 +159,6 @@ class FlightReport:
 
 
 SCAN_STALE_MS = 500  # PX4's CollisionPrevention RANGE_STREAM_TIMEOUT_US
-SCAN_STALE_WARNING = "the runner fell"
 
 
 class ReplicaCore:
@@ -332,9 +331,11 @@ class ReplicaCore:
         positions at once; scanning from each in turn would hand PX4's Collision Prevention
         scans from where the vehicle was, stamped by PX4 as new. One scan from the newest
         position keeps them as fresh as the runner can; how far behind it fell is reported."""
-        p, self._scan_from = self._scan_from, None
-        first, self._batch_first_ms = self._batch_first_ms, None
-        if p is None or self.obstacle_feed is None or self.stage is Stage.DONE:
+        p = self._scan_from
+        if p is None:  # no range sensor to feed, or no position in this read
+            return []
+        first, self._scan_from, self._batch_first_ms = self._batch_first_ms, None, None
+        if self.obstacle_feed is None or self.stage is Stage.DONE:
             return []
         # before the flight a read holds what queued while connecting: not a backlog
         backlog = p.time_ms - first if first is not None and self.stage is Stage.FLIGHT else 0
@@ -601,10 +602,9 @@ class ReplicaCore:
         rep.delays = list(self.scheduler.warnings)
         rep.refusals = list(self.scheduler.refusals)
         rep.faults = list(self.scheduler.faults)
-        stale_told = any(w.startswith(SCAN_STALE_WARNING) for w in rep.warnings)
-        if rep.scan_backlog_ms > SCAN_STALE_MS and not stale_told:
+        if rep.scan_backlog_ms > SCAN_STALE_MS:  # once: a flight is snapshot when it ends
             rep.warnings.append(
-                f"{SCAN_STALE_WARNING} up to {rep.scan_backlog_ms / 1000:.1f} s of vehicle time "
+                f"the runner fell up to {rep.scan_backlog_ms / 1000:.1f} s of vehicle time "
                 "behind the vehicle (that much of its messages read at once): its range sensor's scans "
                 f"were that old, and PX4 drops OBSTACLE_DISTANCE older than {SCAN_STALE_MS / 1000:g} s "
                 "(Collision Prevention then holds the vehicle); a lower vehicle.speedFactor keeps up"

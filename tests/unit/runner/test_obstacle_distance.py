@@ -133,7 +133,22 @@ def test_a_backlog_read_at_once_gets_one_scan_from_its_newest_position_and_a_war
     core.handle(LocalPosition(37_050, 7.8, 0.0, -5.0), 1.1)
     core.end_batch(1.1)  # read on its own: no backlog, the worst one kept
     assert core.report.scan_backlog_ms == 1950
-    core._snapshot()
-    core._snapshot()
+    core._snapshot()  # what the flight's end does
     [warning] = [w for w in core.report.warnings if w.startswith("the runner fell")]
     assert "up to 1.9 s of vehicle time behind" in warning and "vehicle.speedFactor" in warning
+
+
+def test_a_runner_that_keeps_up_scans_at_the_sensors_rate_and_warns_of_nothing() -> None:
+    core = ReplicaCore(CoreConfig(obstacles=[WALL], range_sensor=RangeSensor(), commands=[]))
+    core.start(0.0)
+    core.handle(Attitude(900, 0.0), 0.1)
+    exchange(core, ScriptedVehicle(), boot(35_000), wall=0.1)
+    core.end_batch(0.1)
+    scans = []
+    for k in range(1, 41):  # each position read on its own, 50 ms apart
+        core.handle(LocalPosition(35_000 + 50 * k, 0.1 * k, 0.0, -5.0), 1.0 + k / 1000)
+        scans += [m for m in core.end_batch(1.0 + k / 1000) if isinstance(m, ObstacleDistance)]
+    assert 19 <= len(scans) <= 21  # 10 Hz over 2 s
+    core._snapshot()
+    assert core.report.scan_backlog_ms == 0
+    assert not any(w.startswith("the runner fell") for w in core.report.warnings)
