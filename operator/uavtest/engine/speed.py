@@ -8,10 +8,17 @@ scaled by the CPU one replica gets (cores / replicas flown at once):
 
     default = clamp(floor(SPEED_PER_CORE * cores / at_once), 1, DEFAULT_SPEED_MAX)
 
-Measured on a 2-core machine (competition mission2, 4 replicas, 2 at a time, one core each):
-speed factor 10 flew 4/4 pass (168 flights/h); 20 flew 96 flights/h with one error, CPU-bound.
-Hence ``SPEED_PER_CORE`` = 10. ``DEFAULT_SPEED_MAX`` = 20 because a single PX4 SIH reached at
-most ~18x real time there, whatever the factor asked.
+A replica is two processes: PX4 and the runner, which must read PX4's telemetry as fast as PX4
+sends it (the mission upload and the range sensor's scans have deadlines on PX4's clock). Measured
+on a 2-core machine, one replica of ``examples/collision-prevention.yaml`` (stop 47): PX4 SIH took
+0.95 cores at 10x, 1.2-1.45 at 15x, 1.6-1.9 at 20x (about 0.09 core per unit of speed), the runner
+0.2-0.27 cores besides. At 20x the two wanted more than the machine had: the runner fell 7-43 s of
+vehicle time behind PX4 and connected ~22 s of wall time late, and one flight of three ended
+``fail`` with PX4 refusing mode mission; at 15x 5 of 5 passed (two with the runner 2.1 s behind
+once), at 10x 2 of 2 with no lag. Hence ``SPEED_PER_CORE`` = 7.5 (a replica's PX4 and runner in
+~0.9 of its share). The earlier value, 10, came from 4 replicas 2 at a time with factor 10: 4/4
+passed, but that is 1.15 cores of demand per core. ``DEFAULT_SPEED_MAX`` = 20 because a single
+PX4 SIH reached at most ~18x real time there, whatever the factor asked.
 
 The built-in simulator runs in lockstep, as fast as the runner grants time: a speed factor means
 nothing to it, and is ignored with a warning (``speed_factor_notice``).
@@ -39,7 +46,7 @@ __all__ = [
     "wall_timeout",
 ]
 
-SPEED_PER_CORE = 10.0  # reliable PX4 SIH speed factor per core a replica gets (measured, see above)
+SPEED_PER_CORE = 7.5  # PX4 SIH speed factor per core a replica (PX4 + runner) gets (measured, see above)
 DEFAULT_SPEED_MAX = 20.0  # a single PX4 SIH did not run faster than ~18x on the measured machine
 PX4_BOOT_S = 60.0  # vehicle seconds before PX4 flies: ~36 s to ready-to-arm, 10 s arm settle, margin
 PX4_SLOWDOWN = 2.0  # PX4 may reach only half its speed factor on a busy machine

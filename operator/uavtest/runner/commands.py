@@ -86,6 +86,8 @@ from uavtest.spec.models import (
 )
 
 __all__ = [
+    "MISSION_CHECK_MS",
+    "MISSION_RECHECK_MS",
     "OFFBOARD_WARMUP_MS",
     "SETPOINT_PERIOD_MS",
     "CommandScheduler",
@@ -127,6 +129,13 @@ STICK_SETTLE_MS = 600
 STICK_WARMUP_MS = 500
 #: the modes flown by the sticks
 MANUAL_MODES = frozenset({FlightMode.MANUAL, FlightMode.ALTITUDE, FlightMode.POSITION})
+#: an uploaded mission is usable to PX4 only once its navigator has checked it and the commander's
+#: health checks (every 100 ms of vehicle time, Commander.cpp) have cleared ``auto_mission_missing``:
+#: until then mode mission is TEMPORARILY_REJECTED ("Switching to Mission is currently not
+#: available"), which MAVLink defines as "retrying later should work". Such a refusal within this
+#: long after the upload's MISSION_ACK is sent again every ``MISSION_RECHECK_MS``, then recorded.
+MISSION_CHECK_MS = 1000
+MISSION_RECHECK_MS = 200
 LATE_MS = 1000  # a command that runs later than this after its time shifts the rest of the schedule
 SCHEDULE_SHIFTED = (
     "the command schedule was shifted: a command ran more than 1 s late because the vehicle was not "
@@ -459,6 +468,8 @@ class CommandScheduler:
         self.notes: list[str] = []  # refusals the vehicle made; shown in the log and the result
         self.refusals: list[Refusal] = []  # the same, structured (for the verdict's reason)
         self.gave_up: Refusal | None = None  # an arm refused until arm_give_up_ms: no flight
+        #: vehicle ms the vehicle accepted the test's mission (``MISSION_CHECK_MS``); None: no upload
+        self.mission_accepted_ms: int | None = None
         self._sent_ms = 0  # vehicle time the current step was last sent
         self.sent: list[tuple[int, str]] = []  # (vehicle ms, label) of every step started
         self.sticks: ManualControl | None = None
@@ -473,8 +484,9 @@ class CommandScheduler:
         self._current: Step | None = None
         self._confirmation = 0
         self._ack_deadline = math.inf
-        self._retry_at_ms: float | None = None  # a refused arm waits for this vehicle time
+        self._retry_at_ms: float | None = None  # a refused arm (or mode mission) waits for this vehicle time
         self._first_refusal_ms: int | None = None
+        self._first_sent_ms: int | None = None  # a mode mission sent again: its first send
         self._status_seen = False  # the vehicle reports its pre-arm state (SYS_STATUS)
         self._ready_since_ms: int | None = None  # vehicle time it became ready to arm (None: not ready)
         self._waiting_since_ms: int | None = None  # an arm waits for the vehicle to settle, since then
@@ -829,18 +841,46 @@ class CommandScheduler:
             self._retry_at_ms = now_ms + self.arm_retry_ms
             self._ack_deadline = math.inf
             return None
+        if self._mission_still_checked(step, result, now_ms):
+            log.info(
+                "t=%.2f s: vehicle refused %s (%s) %d ms after accepting the mission (PX4 checks a new "
+                "mission first); trying again in %d ms",
+                now_ms / 1000,
+                step.label,
+                name,
+                now_ms - (self.mission_accepted_ms or 0),
+                MISSION_RECHECK_MS,
+            )
+            if self._first_sent_ms is None:
+                self._first_sent_ms = self._sent_ms
+            self._retry_at_ms = now_ms + MISSION_RECHECK_MS
+            self._ack_deadline = math.inf
+            return None
         note = f"t={now_ms / 1000:.2f} s: vehicle refused {step.label} (COMMAND_ACK {name})"
         log.warning(note)
         self.notes.append(note)
-        self.refusals.append(Refusal(step.label, name, self._sent_ms, now_ms))
+        sent_ms = self._first_sent_ms if self._first_sent_ms is not None else self._sent_ms
+        self.refusals.append(Refusal(step.label, name, sent_ms, now_ms))
         self._done()
         return None
+
+    def _mission_still_checked(self, step: Step, result: int, now_ms: int) -> bool:
+        """A mode mission refused for now while the vehicle may still be checking the mission just
+        uploaded (``MISSION_CHECK_MS``): sent again rather than recorded."""
+        return (
+            step.kind is StepKind.MODE
+            and step.mode is FlightMode.MISSION
+            and result == AckResult.TEMPORARILY_REJECTED
+            and self.mission_accepted_ms is not None
+            and now_ms - self.mission_accepted_ms < MISSION_CHECK_MS
+        )
 
     def _retrying_refusal(self) -> bool:
         return bool(self.refusals) and not self.refusals[-1].final
 
     def _done(self) -> None:
         self._current = None
+        self._first_sent_ms = None
         self._waiting_since_ms = None
         self._ack_deadline = math.inf
         self._retry_at_ms = None

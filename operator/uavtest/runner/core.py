@@ -340,6 +340,12 @@ class ReplicaCore:
         # before the flight a read holds what queued while connecting: not a backlog
         backlog = p.time_ms - first if first is not None and self.stage is Stage.FLIGHT else 0
         if backlog > self.report.scan_backlog_ms:
+            if backlog > SCAN_STALE_MS:
+                log.info(
+                    "t=%.2f s: the runner read %.1f s of vehicle time at once (its scans lag that much)",
+                    p.time_ms / 1000,
+                    backlog / 1000,
+                )
             self.report.scan_backlog_ms = backlog
         scan = self.obstacle_feed.on_position(p.time_ms, p.x, p.y, p.z)
         return [scan] if scan is not None else []
@@ -493,6 +499,8 @@ class ReplicaCore:
                     return out
                 if self.uploader.error:
                     return out + self._fail(self.uploader.error)
+                if self.cfg.mission:
+                    self.scheduler.mission_accepted_ms = self.now_ms
                 self.stage = Stage.FLIGHT
                 self.report.start_ms = self.now_ms
                 self.report.armed_ever = self.armed

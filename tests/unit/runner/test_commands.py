@@ -7,6 +7,8 @@ import itertools
 import pytest
 
 from uavtest.runner.commands import (
+    MISSION_CHECK_MS,
+    MISSION_RECHECK_MS,
     STICK_SETTLE_MS,
     STICK_WARMUP_MS,
     CommandScheduler,
@@ -309,3 +311,49 @@ def test_a_command_less_than_a_second_late_does_not_shift_the_schedule() -> None
 def test_unsupported_by_px4_itself_does_not_send_the_user_to_px4() -> None:
     reason = unsupported_reason("MAV_CMD_CONDITION_YAW", "builtin")
     assert "not supported by PX4 v1.15 either" in reason and "fly this test with simulator: px4" not in reason
+
+
+def test_mode_mission_refused_while_px4_checks_the_new_mission_is_sent_again() -> None:
+    """PX4 v1.15 answers mode mission TEMPORARILY_REJECTED until its navigator has checked the
+    mission just uploaded and the commander's next health check (every 100 ms) has seen it: a runner
+    that connects late arms and switches within milliseconds of the upload. Sent again, not recorded."""
+    s = CommandScheduler([cmd(1.0, "mode", mode="mission")])
+    s.mission_accepted_ms = 900
+    assert s.update(1000, 0.0, armed=True) == [mode_command(FlightMode.MISSION)]
+    s.handle_ack(CommandAck(MODE, AckResult.TEMPORARILY_REJECTED), 1010, 0.0)
+    assert s.refusals == [] and s.notes == [] and not s.idle
+    assert s.update(1010 + MISSION_RECHECK_MS - 1, 5.0, armed=True) == []  # vehicle time, not wall time
+    assert s.update(1010 + MISSION_RECHECK_MS, 5.0, armed=True) == [mode_command(FlightMode.MISSION)]
+    assert s.handle_ack(CommandAck(MODE, AckResult.ACCEPTED), 1220, 5.0) is not None
+    assert s.idle and s.refusals == [] and s.error is None
+
+
+def test_mode_mission_refused_long_after_the_upload_or_denied_is_a_refusal() -> None:
+    late = CommandScheduler([cmd(5.0, "mode", mode="mission")])
+    late.mission_accepted_ms = 900
+    late.update(5000, 0.0, armed=True)
+    late.handle_ack(CommandAck(MODE, AckResult.TEMPORARILY_REJECTED), 5010, 0.0)
+    assert late.idle and late.refusals == [Refusal("mode mission", "TEMPORARILY_REJECTED", 5000, 5010)]
+    # refused again and again while checked: recorded once the check has had its time
+    s = CommandScheduler([cmd(1.0, "mode", mode="mission")])
+    s.mission_accepted_ms = 1000
+    t = 1000
+    s.update(t, 0.0, armed=True)
+    while not s.idle:
+        s.handle_ack(CommandAck(MODE, AckResult.TEMPORARILY_REJECTED), t, 0.0)
+        t += MISSION_RECHECK_MS
+        s.update(t, 0.0, armed=True)
+    (refusal,) = s.refusals
+    assert refusal.result == "TEMPORARILY_REJECTED" and refusal.sent_ms == 1000  # its first send
+    assert refusal.ack_ms - 1000 >= MISSION_CHECK_MS
+    assert [label for _, label in s.sent] == ["mode mission"]  # one step, sent again
+    denied = CommandScheduler([cmd(1.0, "mode", mode="mission")])
+    denied.mission_accepted_ms = 990
+    denied.update(1000, 0.0, armed=True)
+    denied.handle_ack(CommandAck(MODE, AckResult.DENIED), 1000, 0.0)
+    assert denied.idle and [r.result for r in denied.refusals] == ["DENIED"]
+    # without an upload (a test with no mission) the refusal is the vehicle's answer at once
+    none = CommandScheduler([cmd(1.0, "mode", mode="mission")])
+    none.update(1000, 0.0, armed=True)
+    none.handle_ack(CommandAck(MODE, AckResult.TEMPORARILY_REJECTED), 1000, 0.0)
+    assert none.idle and len(none.refusals) == 1

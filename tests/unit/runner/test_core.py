@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from uavtest.runner.core import CoreConfig, Ending, ReplicaCore, Stage
 from uavtest.runner.events import (
+    CommandAck,
     CommandLong,
     GcsHeartbeat,
     LocalPosition,
@@ -13,7 +14,7 @@ from uavtest.runner.events import (
     ParamRequestRead,
 )
 from uavtest.runner.mission import FRAME_GLOBAL_RELATIVE_ALT_INT
-from uavtest.runner.px4 import Cmd, ParamType
+from uavtest.runner.px4 import AckResult, Cmd, ParamType
 from uavtest.spec.models import Command, Obstacle
 
 from .vehicle import ScriptedVehicle, boot, exchange, heartbeat
@@ -336,3 +337,35 @@ def test_the_wait_for_the_vehicle_to_settle_does_not_count_against_the_timeout()
     assert rep.ending is Ending.TIMEOUT and rep.armed_ever
     assert rep.end_ms == 15_000  # armed at 10 s (settled), then the test's 5 s
     assert any("and 10.0 s waiting for the vehicle to settle" in n for n in rep.notes)
+
+
+def test_mode_mission_refused_right_after_the_upload_is_sent_again_and_flies() -> None:
+    """The runner arms and switches to mission moments after PX4 accepted the upload; PX4 answers
+    TEMPORARILY_REJECTED until it has checked the mission. The core tells the scheduler when the
+    upload was accepted, so the switch is sent again instead of ending the flight as refused."""
+
+    class ChecksTheMissionFirst(ScriptedVehicle):
+        rejected: int = 0
+
+        def answer(self, out: list) -> list:  # type: ignore[type-arg]
+            replies = super().answer(out)
+            for i, r in enumerate(replies):
+                if isinstance(r, CommandAck) and r.command == Cmd.DO_SET_MODE and self.rejected == 0:
+                    self.rejected += 1
+                    replies[i] = CommandAck(r.command, AckResult.TEMPORARILY_REJECTED)
+            return replies
+
+    core = ReplicaCore(config())
+    vehicle = ChecksTheMissionFirst(param_types={"COM_DISARM_LAND": int(ParamType.INT32)})
+    core.start(0.0)
+    exchange(core, vehicle, [*boot(0), LockstepAnnounce(0)], wall=0.1)
+    assert core.scheduler.mission_accepted_ms == 0
+    fly_lockstep(core, vehicle, [(0.0, 0.0, -0.1 * i) for i in range(100)], land_after=60)
+    rep = core.report
+    assert vehicle.rejected == 1
+    assert [c.command for c in vehicle.commands[:3]] == [
+        Cmd.COMPONENT_ARM_DISARM,
+        Cmd.DO_SET_MODE,
+        Cmd.DO_SET_MODE,
+    ]
+    assert rep.ending is Ending.LANDED and rep.refusals == [] and rep.error is None
