@@ -19,6 +19,7 @@ is False); it is not an error — the verdict then follows the assertions.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -32,6 +33,7 @@ from uavtest.spec.geo import geodetic_to_ned
 
 __all__ = [
     "CLIMB_THRESHOLD",
+    "VERDICT_TOPICS",
     "FlightWindow",
     "crash_reported",
     "flight_window",
@@ -53,9 +55,22 @@ MOTION_SETTLE = 10.0  # s after boot: PX4's height estimate settles by metres; n
 ARMING_STATE_ARMED = 2  # vehicle_status.arming_state, PX4 v1.12 and v1.15
 HOME_AFTER_TAKEOFF = 0.5  # s: PX4 re-sets home right after takeoff detection; take that one
 
+#: the topics a verdict reads: ``trajectory_from_ulog``'s, ``mission_progress_from_ulog``'s
+#: (``crash_reported`` reads the log's texts, which are always parsed). A PX4 SITL log holds about
+#: a hundred topics; parsing these alone takes half the time (26 MB: 0.44 s against 0.92 s)
+VERDICT_TOPICS = (
+    POSITION_TOPIC,
+    "vehicle_land_detected",
+    "vehicle_status",
+    "actuator_armed",
+    "home_position",
+    "mission_result",
+)
 
-def read_ulog(path: Path | str, topics: list[str] | None = None) -> ULog:
-    """Parse a ULog file (the I/O edge). ``topics`` limits parsing to those topic names.
+
+def read_ulog(path: Path | str, topics: Sequence[str] | None = None) -> ULog:
+    """Parse a ULog file (the I/O edge). ``topics`` limits parsing to those topic names (the
+    log's texts, parameters and information are always there).
 
     Raises MissingFile when it does not exist, BadInput when it is not a readable ULog.
     """
@@ -63,7 +78,7 @@ def read_ulog(path: Path | str, topics: list[str] | None = None) -> ULog:
     if not p.is_file():
         raise MissingFile(str(p))
     try:
-        ulog = ULog(str(p), topics, disable_str_exceptions=True)
+        ulog = ULog(str(p), None if topics is None else list(topics), disable_str_exceptions=True)
     except Exception as e:  # pyulog raises bare exceptions of many types for corrupt files
         raise BadInput(f"not a readable PX4 ULog: {type(e).__name__}: {e}", file=str(p)) from e
     return ulog

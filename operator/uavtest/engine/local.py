@@ -30,7 +30,13 @@ from uavtest.engine.bytecode import replica_environ
 from uavtest.engine.launch import ExecLauncher, Launcher, WarmLauncher
 from uavtest.engine.ports import PX4_MAX_INSTANCES, PortAllocator
 from uavtest.engine.replica import DEFAULT_RETRIES, ReplicaJob, run_replica
-from uavtest.engine.speed import available_cores, px4_speed_factor, speed_factor_notice, wall_timeout
+from uavtest.engine.speed import (
+    available_cores,
+    px4_speed_factor,
+    speed_factor_notice,
+    speed_factor_source,
+    wall_timeout,
+)
 from uavtest.errors import BadInput
 from uavtest.spec.aerialist import upstream_simulator_notice
 from uavtest.spec.models import Simulator, UavTest
@@ -356,8 +362,7 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     ]
     pace = ""
     if speed is not None:
-        chosen = spec.vehicle.speed_factor is not None
-        how = "vehicle.speedFactor" if chosen else f"default for {parallel} at a time on {cores} cores"
+        how = speed_factor_source(spec, cores=cores, at_once=parallel)
         pace = f" PX4 at {speed:g}x real time ({how}),"
     console.print(
         f"run [bold]{run_id}[/] of [bold]{name}[/]: {len(indices)} replica(s), {parallel} at a time,{pace} "

@@ -32,22 +32,32 @@ from __future__ import annotations
 import math
 import os
 
+from uavtest.spec.collision_prevention import range_sensor_of
 from uavtest.spec.models import Simulator, UavTestSpec
 
 __all__ = [
     "DEFAULT_SPEED_MAX",
     "PX4_BOOT_S",
+    "SCAN_SPEED_MAX",
     "SPEED_PER_CORE",
     "available_cores",
     "default_speed_factor",
     "px4_speed_env",
     "px4_speed_factor",
     "speed_factor_notice",
+    "speed_factor_source",
     "wall_timeout",
 ]
 
 SPEED_PER_CORE = 7.5  # PX4 SIH speed factor per core a replica (PX4 + runner) gets (measured, see above)
 DEFAULT_SPEED_MAX = 20.0  # a single PX4 SIH did not run faster than ~18x on the measured machine
+#: the default's cap when the runner feeds PX4 a range sensor's scans: PX4's Collision Prevention
+#: drops a scan older than 0.5 s of its clock (RANGE_STREAM_TIMEOUT_US), so the runner must be
+#: scheduled within 500 ms / factor of wall time, every time. Measured on 2 cores
+#: (``examples/collision-prevention.yaml``, stop 47): at 15x the runner was descheduled long enough
+#: for 0.6-0.8 s of PX4's clock (40-53 ms), PX4 stopped short on missing data where the built-in
+#: vehicle's replay of its inputs flew on; at 10x 2 of 2 without such a gap.
+SCAN_SPEED_MAX = 10.0
 PX4_BOOT_S = 60.0  # vehicle seconds before PX4 flies: ~36 s to ready-to-arm, 10 s arm settle, margin
 PX4_SLOWDOWN = 2.0  # PX4 may reach only half its speed factor on a busy machine
 START_S = 120.0  # wall seconds for start-up, aggregation of a replica's log, stopping
@@ -70,9 +80,23 @@ def default_speed_factor(cores: int, at_once: int) -> float:
 
 
 def px4_speed_factor(spec: UavTestSpec, *, cores: int, at_once: int) -> float:
-    """``vehicle.speedFactor`` when given, else the default for this machine and parallelism."""
+    """``vehicle.speedFactor`` when given, else the default for this machine and parallelism, at
+    most ``SCAN_SPEED_MAX`` when the runner is PX4's range sensor."""
     chosen = spec.vehicle.speed_factor
-    return float(chosen) if chosen is not None else default_speed_factor(cores, at_once)
+    if chosen is not None:
+        return float(chosen)
+    default = default_speed_factor(cores, at_once)
+    return min(default, SCAN_SPEED_MAX) if range_sensor_of(spec) is not None else default
+
+
+def speed_factor_source(spec: UavTestSpec, *, cores: int, at_once: int) -> str:
+    """Where ``px4_speed_factor`` came from, for the run's first line."""
+    if spec.vehicle.speed_factor is not None:
+        return "vehicle.speedFactor"
+    how = f"default for {at_once} at a time on {cores} cores"
+    if range_sensor_of(spec) is not None and default_speed_factor(cores, at_once) > SCAN_SPEED_MAX:
+        how += f", at most {SCAN_SPEED_MAX:g}x while the runner is PX4's range sensor"
+    return how
 
 
 def px4_speed_env(speed_factor: float) -> dict[str, str]:

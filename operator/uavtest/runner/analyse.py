@@ -16,6 +16,7 @@ from pathlib import Path
 from uavtest.analysis.models import FlightMetrics, ReplicaResult, Verdict
 from uavtest.analysis.trajectory import Trajectory
 from uavtest.analysis.ulog import (
+    VERDICT_TOPICS,
     crash_reported,
     mission_progress_from_ulog,
     read_ulog,
@@ -109,7 +110,7 @@ def _reference(spec: UavTestSpec) -> Trajectory | None:
     sim = spec.assertions.similarity
     if sim is None or sim.log_file is None:
         return None
-    return trajectory_from_ulog(read_ulog(Path(sim.log_file)), source=sim.log_file)
+    return trajectory_from_ulog(read_ulog(Path(sim.log_file), VERDICT_TOPICS), source=sim.log_file)
 
 
 def analyse(
@@ -162,7 +163,7 @@ def analyse(
     read_error: str | None = None
     if log_path is not None:
         try:
-            ulog = read_ulog(log_path)
+            ulog = read_ulog(log_path, VERDICT_TOPICS)
             trajectory = trajectory_from_ulog(ulog, source=str(log_path))
         except UavTestError as e:
             read_error = f"log unreadable: {e}"

@@ -14,6 +14,8 @@ import pytest
 from pyulog import ULog
 
 from uavtest.analysis.ulog import (
+    VERDICT_TOPICS,
+    crash_reported,
     flight_window,
     mission_progress_from_ulog,
     read_ulog,
@@ -178,3 +180,27 @@ def test_a_land_detector_that_let_go_on_the_ground_is_no_flight(tmp_path: Path) 
     assert not hop.took_off and hop.source == "vehicle_land_detected"
     flight = flight_window(log(2.0))
     assert flight.took_off and flight.start == pytest.approx(4.0) and flight.end == pytest.approx(6.6)
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "px4-sih/square-mission.ulg",
+        "px4-sih/competition-mission2-run1.ulg",
+        "pyulog/sample_px4_events.ulg",
+        "aerialist/samples/flights/mission1.ulg",
+    ],
+)
+def test_the_verdict_topics_alone_give_the_verdicts_inputs(shared_data: Path, name: str) -> None:
+    """The runner parses only VERDICT_TOPICS: the flight's cut, its trajectory relative to home,
+    the mission's progress and a crash text come out as from the whole log."""
+    whole = read_ulog(shared_data / name)
+    some = read_ulog(shared_data / name, VERDICT_TOPICS)
+    assert len(some.data_list) < len(whole.data_list)
+    a, b = trajectory_from_ulog(whole), trajectory_from_ulog(some)
+    assert len(a) > 0
+    for field in ("t", "x", "y", "z"):
+        np.testing.assert_array_equal(getattr(a, field), getattr(b, field))
+    assert mission_progress_from_ulog(some) == mission_progress_from_ulog(whole)
+    assert crash_reported(some) == crash_reported(whole)
+    assert flight_window(some) == flight_window(whole)

@@ -8,13 +8,15 @@ from pathlib import Path
 import pytest
 
 from uavtest.engine.speed import (
+    SCAN_SPEED_MAX,
     default_speed_factor,
     px4_speed_env,
     px4_speed_factor,
     speed_factor_notice,
+    speed_factor_source,
     wall_timeout,
 )
-from uavtest.spec.models import Simulator, UavTestSpec
+from uavtest.spec.models import Avoidance, Simulator, UavTestSpec
 
 
 def spec(simulator: str = "px4", speed: float | None = None) -> UavTestSpec:
@@ -81,3 +83,18 @@ def test_validate_says_the_builtin_simulator_ignores_the_speed_factor(tmp_path: 
     out = io.StringIO()
     assert validate_command(test, out=out) == 0
     assert "warning: vehicle.speedFactor 10 is ignored" in out.getvalue()
+
+
+def test_while_the_runner_is_px4s_range_sensor_the_default_is_at_most_ten() -> None:
+    """PX4's Collision Prevention drops scans older than 0.5 s of its clock: the runner that sends
+    them must be scheduled within 500 ms / factor of wall time."""
+    cp = spec().model_copy(deep=True)
+    cp.vehicle.avoidance = Avoidance.COLLISION_PREVENTION
+    assert px4_speed_factor(cp, cores=2, at_once=1) == SCAN_SPEED_MAX == 10.0
+    assert px4_speed_factor(cp, cores=2, at_once=2) == 7.0  # below the cap already
+    assert px4_speed_factor(spec(), cores=2, at_once=1) == 15.0  # no range sensor: no cap
+    assert px4_speed_factor(spec(speed=20), cores=2, at_once=1) == 20.0  # the test's own wins
+    how = speed_factor_source(cp, cores=2, at_once=1)
+    assert how == "default for 1 at a time on 2 cores, at most 10x while the runner is PX4's range sensor"
+    assert speed_factor_source(cp, cores=2, at_once=2) == "default for 2 at a time on 2 cores"
+    assert speed_factor_source(spec(speed=3), cores=2, at_once=1) == "vehicle.speedFactor"
