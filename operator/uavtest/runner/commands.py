@@ -9,7 +9,9 @@ ground station's joystick keeps sending: stopping would be an RC loss to PX4), a
 them. A refused arm is retried every second of vehicle time (PX4 refuses until its preflight
 checks pass) for ``arm_give_up_s``, then the scheduler gives up (``gave_up``: the vehicle refused
 to fly); other refusals (DENIED, TEMPORARILY_REJECTED, FAILED) are recorded in ``refusals`` and the
-flight goes on (the vehicle decided — the verdict will tell); no ACK at all, or UNSUPPORTED, is a
+flight goes on (the vehicle decided — the verdict will tell), but for a mode mission refused for now
+right after the mission's upload (``MISSION_CHECK_MS``: PX4 is still checking it), which is sent
+again; no ACK at all, or UNSUPPORTED, is a
 bench error (``error``; for UNSUPPORTED worded by ``unsupported_reason``).
 
 Offboard setpoints (``action: setpoint``) take effect at once, like sticks: from then on
