@@ -7,10 +7,12 @@ from uavtest.runner.events import (
     CommandAck,
     CommandLong,
     GcsHeartbeat,
+    Incoming,
     LocalPosition,
     LockstepAnnounce,
     LockstepGrant,
     MissionItemInt,
+    Outgoing,
     ParamRequestRead,
 )
 from uavtest.runner.mission import FRAME_GLOBAL_RELATIVE_ALT_INT
@@ -347,7 +349,7 @@ def test_mode_mission_refused_right_after_the_upload_is_sent_again_and_flies() -
     class ChecksTheMissionFirst(ScriptedVehicle):
         rejected: int = 0
 
-        def answer(self, out: list) -> list:  # type: ignore[type-arg]
+        def answer(self, out: list[Outgoing]) -> list[Incoming]:
             replies = super().answer(out)
             for i, r in enumerate(replies):
                 if isinstance(r, CommandAck) and r.command == Cmd.DO_SET_MODE and self.rejected == 0:
