@@ -32,9 +32,8 @@ from uavtest.engine.ports import PX4_MAX_INSTANCES, PortAllocator
 from uavtest.engine.replica import DEFAULT_RETRIES, ReplicaJob, run_replica
 from uavtest.engine.speed import (
     available_cores,
-    px4_speed_factor,
+    px4_speed_choice,
     speed_factor_notice,
-    speed_factor_source,
     wall_timeout,
 )
 from uavtest.errors import BadInput
@@ -339,7 +338,7 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     run_id = new_run_id()
     out = options.out.resolve()
     store = LocalStore(out)
-    speed = px4_speed_factor(spec, cores=cores, at_once=parallel) if px4_bin is not None else None
+    speed, how = px4_speed_choice(spec, cores=cores, at_once=parallel) if px4_bin is not None else (None, "")
     attempt_wall = wall_timeout(spec.timeout, spec.vehicle.simulator, speed)
     jobs = [
         ReplicaJob(
@@ -362,7 +361,6 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     ]
     pace = ""
     if speed is not None:
-        how = speed_factor_source(spec, cores=cores, at_once=parallel)
         pace = f" PX4 at {speed:g}x real time ({how}),"
     console.print(
         f"run [bold]{run_id}[/] of [bold]{name}[/]: {len(indices)} replica(s), {parallel} at a time,{pace} "

@@ -42,6 +42,7 @@ __all__ = [
     "SPEED_PER_CORE",
     "available_cores",
     "default_speed_factor",
+    "px4_speed_choice",
     "px4_speed_env",
     "px4_speed_factor",
     "speed_factor_notice",
@@ -82,21 +83,23 @@ def default_speed_factor(cores: int, at_once: int) -> float:
 def px4_speed_factor(spec: UavTestSpec, *, cores: int, at_once: int) -> float:
     """``vehicle.speedFactor`` when given, else the default for this machine and parallelism, at
     most ``SCAN_SPEED_MAX`` when the runner is PX4's range sensor."""
-    chosen = spec.vehicle.speed_factor
-    if chosen is not None:
-        return float(chosen)
-    default = default_speed_factor(cores, at_once)
-    return min(default, SCAN_SPEED_MAX) if range_sensor_of(spec) is not None else default
+    return px4_speed_choice(spec, cores=cores, at_once=at_once)[0]
 
 
 def speed_factor_source(spec: UavTestSpec, *, cores: int, at_once: int) -> str:
     """Where ``px4_speed_factor`` came from, for the run's first line."""
+    return px4_speed_choice(spec, cores=cores, at_once=at_once)[1]
+
+
+def px4_speed_choice(spec: UavTestSpec, *, cores: int, at_once: int) -> tuple[float, str]:
+    """PX4's speed factor for this test, machine and parallelism, and where it came from."""
     if spec.vehicle.speed_factor is not None:
-        return "vehicle.speedFactor"
+        return float(spec.vehicle.speed_factor), "vehicle.speedFactor"
+    default = default_speed_factor(cores, at_once)
     how = f"default for {at_once} at a time on {cores} cores"
-    if range_sensor_of(spec) is not None and default_speed_factor(cores, at_once) > SCAN_SPEED_MAX:
-        how += f", at most {SCAN_SPEED_MAX:g}x while the runner is PX4's range sensor"
-    return how
+    if range_sensor_of(spec) is not None and default > SCAN_SPEED_MAX:
+        return SCAN_SPEED_MAX, f"{how}, at most {SCAN_SPEED_MAX:g}x while the runner is PX4's range sensor"
+    return default, how
 
 
 def px4_speed_env(speed_factor: float) -> dict[str, str]:

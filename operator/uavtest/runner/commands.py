@@ -488,7 +488,6 @@ class CommandScheduler:
         self._ack_deadline = math.inf
         self._retry_at_ms: float | None = None  # a refused arm (or mode mission) waits for this vehicle time
         self._first_refusal_ms: int | None = None
-        self._first_sent_ms: int | None = None  # a mode mission sent again: its first send
         self._status_seen = False  # the vehicle reports its pre-arm state (SYS_STATUS)
         self._ready_since_ms: int | None = None  # vehicle time it became ready to arm (None: not ready)
         self._waiting_since_ms: int | None = None  # an arm waits for the vehicle to settle, since then
@@ -853,16 +852,15 @@ class CommandScheduler:
                 now_ms - (self.mission_accepted_ms or 0),
                 MISSION_RECHECK_MS,
             )
-            if self._first_sent_ms is None:
-                self._first_sent_ms = self._sent_ms
             self._retry_at_ms = now_ms + MISSION_RECHECK_MS
             self._ack_deadline = math.inf
             return None
         note = f"t={now_ms / 1000:.2f} s: vehicle refused {step.label} (COMMAND_ACK {name})"
         log.warning(note)
         self.notes.append(note)
-        sent_ms = self._first_sent_ms if self._first_sent_ms is not None else self._sent_ms
-        self.refusals.append(Refusal(step.label, name, sent_ms, now_ms))
+        # the step's first send (``sent``), a mode mission sent again included: the vehicle's words
+        # since then are quoted with the refusal
+        self.refusals.append(Refusal(step.label, name, self.sent[-1][0], now_ms))
         self._done()
         return None
 
@@ -882,7 +880,6 @@ class CommandScheduler:
 
     def _done(self) -> None:
         self._current = None
-        self._first_sent_ms = None
         self._waiting_since_ms = None
         self._ack_deadline = math.inf
         self._retry_at_ms = None
