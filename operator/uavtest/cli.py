@@ -14,6 +14,7 @@ from rich.console import Console
 
 from uavtest.engine.entry import runner, sitl
 from uavtest.errors import run_at_boundary
+from uavtest.process_exit import run_then_end
 from uavtest.run_options import Engine, ignored_options, ignored_warning
 
 app = typer.Typer(
@@ -220,5 +221,11 @@ def main() -> None:
     run_at_boundary(lambda: app(standalone_mode=True), say)
 
 
+def script() -> None:
+    """The ``uavtest`` console script: ``main``, then the process ends without the interpreter's
+    teardown (``uavtest.process_exit``: ~0.45 s of a ``uavtest run`` on a 2-core machine)."""
+    run_then_end(main)
+
+
 if __name__ == "__main__":
-    main()
+    script()

@@ -9,9 +9,7 @@ error), never a traceback.
 
 from __future__ import annotations
 
-import contextlib
 import logging
-import os
 import sys
 from pathlib import Path
 from typing import Annotated
@@ -19,6 +17,7 @@ from typing import Annotated
 import typer
 
 from uavtest.errors import run_at_boundary
+from uavtest.process_exit import exit_status, flush_and_exit
 
 __all__ = ["app", "main", "runner", "sitl"]
 
@@ -163,22 +162,9 @@ def main() -> None:
         run_at_boundary(lambda: app(standalone_mode=True), lambda text: print(text, file=sys.stderr))
         code = 0
     except SystemExit as e:
-        code = _exit_status(e.code)
+        code = exit_status(e.code)
     logging.shutdown()
-    for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(OSError, ValueError):
-            stream.flush()
-    os._exit(code)
-
-
-def _exit_status(code: object) -> int:
-    """``sys.exit``'s argument as the process's status: None 0, a message 1 (printed), else int."""
-    if code is None:
-        return 0
-    if isinstance(code, int):
-        return code
-    print(code, file=sys.stderr)
-    return 1
+    flush_and_exit(code)
 
 
 if __name__ == "__main__":
