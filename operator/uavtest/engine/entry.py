@@ -9,17 +9,19 @@ error), never a traceback.
 
 from __future__ import annotations
 
+import functools
 import logging
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from uavtest.errors import run_at_boundary
 from uavtest.process_exit import exit_status, flush_and_exit
 
-__all__ = ["app", "main", "runner", "sitl"]
+__all__ = ["app", "command", "main", "runner", "sitl"]
 
 app = typer.Typer(
     name="uavtest-replica",
@@ -151,6 +153,14 @@ app.command()(runner)
 app.command()(sitl)
 
 
+@functools.cache
+def command() -> Callable[..., Any]:
+    """The replica command line as a click command, built once: typer builds it from the
+    functions' signatures at every call of ``app``; the fork server builds it before forking
+    (``uavtest.engine.prefork``)."""
+    return typer.main.get_command(app)
+
+
 def main() -> None:
     """Entry point: run the command, translate known errors to a message and an exit code.
 
@@ -159,7 +169,7 @@ def main() -> None:
     printed its result, and only the standard streams and the log handlers are left to flush.
     """
     try:
-        run_at_boundary(lambda: app(standalone_mode=True), lambda text: print(text, file=sys.stderr))
+        run_at_boundary(lambda: command()(standalone_mode=True), lambda text: print(text, file=sys.stderr))
         code = 0
     except SystemExit as e:
         code = exit_status(e.code)

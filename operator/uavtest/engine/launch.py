@@ -43,6 +43,7 @@ PRELOAD = [
     "uavtest.engine.launch",
     "uavtest.runner.main",
     "uavtest.sitl.main",
+    "uavtest.engine.prefork",  # last: what the imports leave for each process to do once
 ]
 ENTRY_MODULE = "uavtest.engine.entry"  # what a warm process runs (never uavtest.cli)
 

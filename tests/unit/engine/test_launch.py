@@ -98,3 +98,30 @@ def test_a_runner_starts_without_the_simulator_or_the_console() -> None:
     )
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_the_fork_server_leaves_its_children_no_start_up_work() -> None:
+    """What every replica process would otherwise redo is done once in the warm server: the
+    replica command line is built, the test loaders imported, PX4's parameter table read."""
+    from uavtest.engine.launch import PRELOAD
+
+    code = (
+        "import sys\n"
+        f"for name in {PRELOAD!r}: __import__(name)\n"
+        "from uavtest.engine.entry import command\n"
+        "from uavtest.px4.parameters import parameters\n"
+        "left = [what for what, done in (('command', command.cache_info().currsize),"
+        " ('parameters', parameters.cache_info().currsize),"
+        " ('loaders', 'uavtest.spec.loaders' in sys.modules)) if not done]\n"
+        "print(left); sys.exit(bool(left))"
+    )
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_the_replica_command_line_is_built_once_and_still_answers() -> None:
+    from uavtest.engine.entry import command
+
+    assert command() is command()
+    proc = subprocess.run(_cli("sitl", "--help"), capture_output=True, text=True, check=False)
+    assert proc.returncode == 0 and "--lockstep" in proc.stdout, proc.stderr
