@@ -93,7 +93,9 @@ def run_command(
     for n, test in enumerate(tests, 1):
         if several:
             err.rule(f"test {n}/{len(tests)}: {test}", align="left")
-        options = RunOptions(test=test, replicas=replicas, jobs=jobs, out=out, seed=seed, replica=replica)
+        options = RunOptions(
+            test=test, replicas=replicas, jobs=jobs, out=out, seed=seed, replica=replica, warm=several
+        )
         try:
             run = run_local(options, console=err)
         except UavTestError as e:

@@ -63,9 +63,10 @@ class EngineSettings(BaseSettings):
     """Environment of the local engine.
 
     ``UAVTEST_PX4_BIN`` names a PX4 SITL binary (for ``vehicle.simulator: px4``);
-    ``UAVTEST_LAUNCH`` is ``fork`` (default: with several replicas, their processes are forked
-    from a warm fork server, no import cost per process) or ``exec`` (each process started from
-    scratch; always so for a single replica and for PX4).
+    ``UAVTEST_LAUNCH`` is ``fork`` (default: with several replicas, or several tests in one
+    ``uavtest run``, their processes are forked from a warm fork server, no import cost per
+    process) or ``exec`` (each process started from scratch; always so for a single replica of a
+    single test and for PX4).
     """
 
     model_config = SettingsConfigDict(env_prefix="UAVTEST_", extra="ignore")
@@ -86,6 +87,10 @@ class RunOptions(BaseModel):
     seed: int | None = Field(None, description="base seed; overrides spec.seed")
     replica: int | None = Field(None, description="fly only this replica (a replay)")
     retries: int = Field(DEFAULT_RETRIES, ge=0)
+    warm: bool = Field(
+        False,
+        description="fork even a single replica from the warm server: more runs follow in this process",
+    )
 
 
 @dataclass(slots=True)
@@ -252,13 +257,14 @@ def _fly_all(
         console.line()  # a live display ends its last frame without a newline when not on a terminal
 
 
-def _launcher(settings: EngineSettings, px4_bin: Path | None, replicas: int) -> Launcher:
-    """Fork from a warm server when it pays: several replicas of the built-in simulator.
+def _launcher(settings: EngineSettings, px4_bin: Path | None, replicas: int, warm: bool) -> Launcher:
+    """Fork from a warm server when it pays: several replicas of the built-in simulator, in this
+    run or (``warm``) in the runs that follow it in this process (``uavtest run`` of several tests).
 
-    One replica starts faster exec'd (its two processes import in parallel, while a fork
+    One replica alone starts faster exec'd (its two processes import in parallel, while a fork
     server imports once, serially, before the first fork); PX4 is a binary, always exec'd.
     """
-    if settings.launch == "fork" and px4_bin is None and replicas > 1:
+    if settings.launch == "fork" and px4_bin is None and (replicas > 1 or warm):
         warm = WarmLauncher()
         warm.warm()  # the server imports while the engine prepares the replicas
         return warm
@@ -329,7 +335,7 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     seed = options.seed if options.seed is not None else test.spec.seed
     spec = test.spec.model_copy(update={"replicas": replicas, "seed": seed})
     indices = [options.replica] if options.replica is not None else list(range(replicas))
-    launcher = _launcher(settings, px4_bin, len(indices))
+    launcher = _launcher(settings, px4_bin, len(indices), options.warm)
     parallel = min(jobs_wanted, len(indices))
     if px4_bin is not None:
         parallel = min(parallel, PX4_MAX_INSTANCES)

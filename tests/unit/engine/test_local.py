@@ -93,3 +93,24 @@ def test_waiting_for_a_runner_ends_at_its_first_line_or_gives_up(tmp_path: Path)
     assert wait_for_first_line(log, wait_s=30.0)
     timer.join()
     assert not wait_for_first_line(tmp_path / "absent.log", wait_s=0.1)
+
+
+@pytest.mark.parametrize(
+    ("launch", "px4", "replicas", "warm", "forked"),
+    [
+        ("fork", False, 1, False, False),  # one replica alone: its two processes import in parallel
+        ("fork", False, 4, False, True),
+        ("fork", False, 1, True, True),  # several tests in one `uavtest run`: the server pays
+        ("fork", True, 4, True, False),  # PX4 is a binary
+        ("exec", False, 4, True, False),  # the user's choice
+    ],
+)
+def test_replica_processes_are_forked_where_a_warm_server_pays(
+    launch: str, px4: bool, replicas: int, warm: bool, forked: bool
+) -> None:
+    from uavtest.engine.launch import WarmLauncher
+    from uavtest.engine.local import EngineSettings, _launcher
+
+    settings = EngineSettings(launch=launch)
+    launcher = _launcher(settings, Path("/opt/px4/bin/px4") if px4 else None, replicas, warm)
+    assert isinstance(launcher, WarmLauncher) is forked
