@@ -2,7 +2,9 @@
 
 (a) real-time factor of one replica with the runner in the loop: simulated flight seconds per
     wall second, start-up of both processes included (``uavtest run --replicas 1``);
-(b) throughput of ``uavtest run --replicas 40`` in flights per hour, J = number of cores.
+(b) throughput of ``uavtest run --replicas 40`` in flights per hour, J = number of cores;
+(c) with ``--tests N``: throughput of one ``uavtest run FOLDER --replicas 1`` over N copies of the
+    test under their own names (a generator's output flown once each), flights per hour.
 
 PX4 v1.15 SIH on this 2-core machine (issue 3): at most ~18x real time (speed factor 20 uses
 1.2 cores, higher factors fail), ~36 s of simulated boot, ~520 competition flights per hour.
@@ -15,7 +17,7 @@ within 2x of off.
 
     python bench/bench_engine.py [--replicas 40] [--single-runs 3] [--jobs J] [--test FILE]
                                  [--launch fork|exec|both] [--skip-throughput]
-                                 [--avoidance as-test|none|local-planner|both]
+                                 [--avoidance as-test|none|local-planner|both] [--tests N]
 """
 
 from __future__ import annotations
@@ -101,6 +103,27 @@ def throughput(test: Path, replicas: int, jobs: int | None, launch: str) -> None
     )
 
 
+def several_tests(test: Path, count: int, launch: str) -> None:
+    """(c): ``count`` copies of ``test``, each its own UavTest, flown once each by one command."""
+    from uavtest.spec.loaders import load_test
+    from uavtest.spec.render import render
+    from uavtest.spec.yaml_io import dump_yaml
+
+    print(f"(c) uavtest run FOLDER --replicas 1 over {count} copies of {test.name}, UAVTEST_LAUNCH={launch}")
+    manifest = render(load_test(test))
+    with tempfile.TemporaryDirectory(prefix="uavtest-bench-") as tmp:
+        folder = Path(tmp) / "tests"
+        folder.mkdir()
+        for k in range(count):
+            manifest["metadata"]["name"] = f"{test.stem}-{k:03d}"
+            (folder / f"{test.stem}-{k:03d}.yaml").write_text(dump_yaml(manifest))
+        summaries, wall, code = uavtest_run(folder, Path(tmp) / "out", "--replicas", "1", launch=launch)
+    results = [r for summary in summaries for r in summary["results"]]
+    passed = sum(r["verdict"] == "pass" for r in results)
+    print(f"    {passed} of {len(results)} passed (exit {code}) in {wall:.1f} s wall")
+    print(f"    throughput: {len(results) / wall * 3600.0:,.0f} flights/h")
+
+
 def with_avoidance(test: Path, avoidance: str, folder: Path) -> Path:
     """A self-contained copy of ``test`` (``uavtest render``) flown with ``avoidance``."""
     from uavtest.spec.loaders import load_test
@@ -122,6 +145,7 @@ def main() -> None:
     parser.add_argument("--single-runs", type=int, default=3)
     parser.add_argument("--jobs", type=int, default=None)
     parser.add_argument("--skip-throughput", action="store_true")
+    parser.add_argument("--tests", type=int, default=0, help="(c): one-replica tests in one command")
     parser.add_argument(
         "--launch", choices=["fork", "exec", "both"], default="both", help="how replica processes start"
     )
@@ -146,6 +170,9 @@ def main() -> None:
             if not args.skip_throughput:
                 for launch in launches:
                     throughput(test, args.replicas, args.jobs, launch)
+            if args.tests > 0:
+                for launch in launches:
+                    several_tests(test, args.tests, launch)
 
 
 if __name__ == "__main__":
