@@ -104,3 +104,25 @@ def test_the_ci_examples_local_command_runs_as_written(repo_root: Path, tmp_path
     doc = junitparser.JUnitXml.fromfile(str(tmp_path / "reports" / "uavtest.xml"))
     assert [s.name for s in doc] == ["hover", "obstacle-pass"]
     assert (doc.tests, doc.failures, doc.errors) == (6, 0, 0)
+
+
+def test_one_replica_tests_fly_side_by_side_and_report_in_their_order(
+    repo_root: Path, tmp_path: Path
+) -> None:
+    """A generator's output: many tests, one replica each. With --jobs 2 two fly at once (the
+    second starts before the first is done); results, table and JSON keep the files' order."""
+    folder = tmp_path / "tests"
+    folder.mkdir()
+    hover = (repo_root / "examples/hover.yaml").read_text()
+    for k in range(3):
+        (folder / f"t{k}.yaml").write_text(hover.replace("name: hover", f"name: hover-{k}"))
+    out = _run(str(folder), "--replicas", "1", "--jobs", "2", "--out", str(tmp_path / "runs"), "--json")
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert "3 tests, 2 at a time" in out.stderr
+    assert out.stderr.index("test 1/3:") < out.stderr.index("test 2/3:") < out.stderr.index("test 3/3:")
+    assert out.stderr.index("test 2/3:") < out.stderr.index("test 1/3 done")  # side by side
+    summaries = json.loads(out.stdout)
+    assert [(s["test"], s["passed"]) for s in summaries] == [("hover-0", 1), ("hover-1", 1), ("hover-2", 1)]
+    for s in summaries:  # every replica flew and stored its log, on its own ports
+        replica = tmp_path / "runs" / "local" / s["test"] / s["run_id"] / "replica-0"
+        assert (replica / "flight.ulg").stat().st_size > 0

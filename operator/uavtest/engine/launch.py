@@ -50,6 +50,10 @@ ENTRY_MODULE = "uavtest.engine.entry"  # what a warm process runs (never uavtest
 
 PR_SET_PDEATHSIG = 1  # linux/prctl.h
 
+#: multiprocessing's bookkeeping of a process's children is not meant for threads: every
+#: ``WarmLauncher`` of this process (one per test flown side by side) starts and reaps under it
+_CHILDREN_LOCK = threading.Lock()
+
 
 class Started(Protocol):
     """A started process: ``subprocess.Popen`` or a forked warm process."""
@@ -222,7 +226,7 @@ class WarmLauncher:
     def __init__(self, preload: list[str] | None = None) -> None:
         self._context = multiprocessing.get_context("forkserver")
         self._context.set_forkserver_preload(list(PRELOAD if preload is None else preload))
-        self._lock = threading.Lock()
+        self._lock = _CHILDREN_LOCK
 
     def warm(self) -> None:
         """Start the fork server now (it imports in the background) instead of at the first fork."""

@@ -6,6 +6,7 @@ Artifacts go to a ``LocalStore`` under ``--out`` with the object-store layout (n
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import os
 import secrets
@@ -30,6 +31,7 @@ from uavtest.engine.bytecode import replica_environ
 from uavtest.engine.launch import ExecLauncher, Launcher, WarmLauncher
 from uavtest.engine.ports import PX4_MAX_INSTANCES, PortAllocator
 from uavtest.engine.replica import DEFAULT_RETRIES, ReplicaJob, run_replica
+from uavtest.engine.side_by_side import Shared
 from uavtest.engine.speed import (
     available_cores,
     px4_speed_choice,
@@ -179,9 +181,10 @@ class _Board:
     While a replica flies, its line shows the runner's latest log line (its stage).
     """
 
-    def __init__(self, seeds: dict[int, int], logs: dict[int, Path]) -> None:
+    def __init__(self, seeds: dict[int, int], logs: dict[int, Path], name: str = "") -> None:
         self.seeds = seeds
         self.logs = logs
+        self.name = name
         self.status: dict[int, str] = dict.fromkeys(seeds, "waiting")
         self.progress = Progress(
             TextColumn("[bold]{task.description}"),
@@ -203,6 +206,10 @@ class _Board:
             detail = f" · min distance {m.min_obstacle_distance:.2f} m"
         self.status[result.index] = f"{result.verdict.value}{detail}"
         self.progress.advance(self.task)
+
+    def line(self, index: int) -> str:
+        """One replica's row as plain text: ``replica 3  seed 1003  pass · min distance 1.62 m``."""
+        return f"replica {index}  seed {self.seeds[index]}  {self.status[index]}"
 
     def __rich__(self) -> RenderableType:
         lines = Table.grid(padding=(0, 2))
@@ -226,34 +233,39 @@ def _fly_all(
     launcher: Launcher,
     board: _Board,
     console: Console,
+    shared: Shared | None = None,
 ) -> None:
-    ports = PortAllocator()
-    cancel = threading.Event()
+    """Fly the replicas, ``parallel`` at a time, under a live board; side by side with other
+    tests (``shared``): within the shared slots, a line per finished replica instead of the board
+    (one live display per console)."""
+    ports = shared.ports if shared is not None else PortAllocator()
+    cancel = shared.cancel if shared is not None else threading.Event()
+
+    def fly(job: ReplicaJob) -> ReplicaResult:
+        slot = shared.slots if shared is not None else contextlib.nullcontext()
+        with slot:
+            return run_replica(
+                job, ports=ports, store=store, on_status=board.set, cancel=cancel, launcher=launcher
+            )
+
+    live = Live(board, console=console, refresh_per_second=4, transient=False) if shared is None else None
     with (
-        Live(board, console=console, refresh_per_second=4, transient=False),
+        live if live is not None else contextlib.nullcontext(),
         ThreadPoolExecutor(max_workers=parallel, thread_name_prefix="replica") as pool,
     ):
-        futures: list[Future[ReplicaResult]] = [
-            pool.submit(
-                run_replica,
-                job,
-                ports=ports,
-                store=store,
-                on_status=board.set,
-                cancel=cancel,
-                launcher=launcher,
-            )
-            for job in jobs
-        ]
+        futures: list[Future[ReplicaResult]] = [pool.submit(fly, job) for job in jobs]
         try:
             for future in as_completed(futures):
-                board.done(future.result())
+                result = future.result()
+                board.done(result)
+                if live is None:
+                    console.print(f"{board.name} · {board.line(result.index)}", highlight=False)
         except BaseException:
             cancel.set()  # every replica stops its processes; the pool then drains
             for f in futures:
                 f.cancel()
             raise
-    if not console.is_terminal:
+    if live is not None and not console.is_terminal:
         console.line()  # a live display ends its last frame without a newline when not on a terminal
 
 
@@ -298,8 +310,13 @@ def _import_aggregation(after: Path | None = None, wait_s: float = 10.0) -> None
         importlib.import_module(module)
 
 
-def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRun:
-    """Fly a test's replicas locally and aggregate them; raises BadInput before flying anything."""
+def run_local(
+    options: RunOptions, *, console: Console | None = None, shared: Shared | None = None
+) -> LocalRun:
+    """Fly a test's replicas locally and aggregate them; raises BadInput before flying anything.
+
+    ``shared``: the test flies side by side with others of the same command (``side_by_side``).
+    """
     from uavtest.analysis.verdict import simulator_warnings
     from uavtest.engine.aggregate import aggregate_run
     from uavtest.spec.loaders import load_test
@@ -373,7 +390,9 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
         f"artifacts in {store.root / run_prefix(NAMESPACE, name, run_id)}",
         highlight=False,
     )
-    board = _Board({j.index: j.seed for j in jobs}, {j.index: j.out_dir / "runner.stderr.log" for j in jobs})
+    board = _Board(
+        {j.index: j.seed for j in jobs}, {j.index: j.out_dir / "runner.stderr.log" for j in jobs}, name
+    )
     # cold-started built-in replicas import first (forked ones have already). PX4 is not in
     # lockstep: the import runs during its boot, as a core taken from it mid-flight changes it
     cold = isinstance(launcher, ExecLauncher) and px4_bin is None
@@ -381,9 +400,10 @@ def run_local(options: RunOptions, *, console: Console | None = None) -> LocalRu
     threading.Thread(
         target=_import_aggregation, args=(first_log,), name="import-aggregation", daemon=True
     ).start()
-    _fly_all(jobs, parallel, store, launcher, board, console)
+    _fly_all(jobs, parallel, store, launcher, board, console, shared)
 
-    summary = aggregate_run(store, NAMESPACE, name, run_id, indices, spec)
+    with shared.aggregate if shared is not None else contextlib.nullcontext():
+        summary = aggregate_run(store, NAMESPACE, name, run_id, indices, spec)
     summary_path = store.path(aggregate_key(NAMESPACE, name, run_id, "summary.json"))
     plot_path = store.path(aggregate_key(NAMESPACE, name, run_id, "trajectories.png"))
     return LocalRun(
