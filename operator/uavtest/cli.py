@@ -83,7 +83,11 @@ def run(
     ],
     replicas: Annotated[int | None, typer.Option(help="how many replicas (overrides spec.replicas)")] = None,
     jobs: Annotated[
-        int | None, typer.Option(help="local: replicas at once (default: number of cores)")
+        int | None,
+        typer.Option(
+            help="local: replicas at once (default: number of cores); several tests fly that many "
+            "side by side, sharing as many replica slots"
+        ),
     ] = None,
     out: Annotated[
         Path | None,
@@ -133,7 +137,8 @@ def run(
     exits 3 and leaves the UavTest running.
 
     Several tests (files, or a folder's *.yaml / *.yml): all are checked first (a wrong one: exit 2,
-    nothing flies), then flown one after the other (kubernetes: all created, then followed
+    nothing flies), then flown side by side, --jobs at a time sharing as many replica slots (one
+    after the other with a PX4 test among them; kubernetes: all created, then followed
     together); one table, one exit code: 1 if any test failed, else 2 if any was bad input, else 3
     if any had bench errors, else 0. --junit FILE writes JUnit XML, one suite per test and a case
     per replica (also aggregate/junit.xml in the store); --json prints a list then.
