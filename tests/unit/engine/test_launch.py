@@ -96,8 +96,7 @@ def test_a_runner_starts_without_the_simulator_or_the_console() -> None:
         "heavy = [m for m in ('uavtest.sitl.vehicle', 'rich', 'uavtest.engine.command') if m in sys.modules];"
         "print(heavy); sys.exit(bool(heavy))"
     )
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
-    assert proc.returncode == 0, proc.stdout + proc.stderr
+    _assert_exits_0(code)
 
 
 def test_the_fork_server_leaves_its_children_no_start_up_work() -> None:
@@ -115,6 +114,11 @@ def test_the_fork_server_leaves_its_children_no_start_up_work() -> None:
         " ('loaders', 'uavtest.spec.loaders' in sys.modules)) if not done]\n"
         "print(left); sys.exit(bool(left))"
     )
+    _assert_exits_0(code)
+
+
+def _assert_exits_0(code: str) -> None:
+    """Run ``code`` in a fresh interpreter (nothing imported yet); it exits 0 or says why not."""
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
