@@ -258,8 +258,9 @@ def _fly_all(
             for future in as_completed(futures):
                 result = future.result()
                 board.done(result)
-                if live is None:
-                    console.print(f"{board.name} · {board.line(result.index)}", highlight=False)
+                if shared is not None:  # no live board: a line, kept out of other tests' blocks
+                    with shared.output:
+                        console.print(f"{board.name} · {board.line(result.index)}", highlight=False)
         except BaseException:
             cancel.set()  # every replica stops its processes; the pool then drains
             for f in futures:
@@ -330,11 +331,14 @@ def run_local(
         for n in [aerialist_simulator_notice(options.test), unmodelled_notice(unmodelled_params(test.spec))]
         if n
     ]
-    for n in notices:
-        console.print(f"[cyan]notice:[/] {n}", highlight=False)
-    for w in [*simulator_warnings(test.spec), speed_factor_notice(test.spec)]:
-        if w:
-            console.print(f"[yellow]warning:[/] {w}", highlight=False)
+    # side by side, a test's lines stay together, not inside another test's block
+    together = shared.output if shared is not None else contextlib.nullcontext()
+    with together:
+        for n in notices:
+            console.print(f"[cyan]notice:[/] {n}", highlight=False)
+        for w in [*simulator_warnings(test.spec), speed_factor_notice(test.spec)]:
+            if w:
+                console.print(f"[yellow]warning:[/] {w}", highlight=False)
     px4_bin = _px4_bin(test, settings, options.test)
 
     replicas = options.replicas if options.replicas is not None else test.spec.replicas
@@ -385,11 +389,12 @@ def run_local(
     pace = ""
     if speed is not None:
         pace = f" PX4 at {speed:g}x real time ({how}),"
-    console.print(
-        f"run [bold]{run_id}[/] of [bold]{name}[/]: {len(indices)} replica(s), {parallel} at a time,{pace} "
-        f"artifacts in {store.root / run_prefix(NAMESPACE, name, run_id)}",
-        highlight=False,
-    )
+    with together:
+        console.print(
+            f"run [bold]{run_id}[/] of [bold]{name}[/]: {len(indices)} replica(s), {parallel} at a time,"
+            f"{pace} artifacts in {store.root / run_prefix(NAMESPACE, name, run_id)}",
+            highlight=False,
+        )
     board = _Board(
         {j.index: j.seed for j in jobs}, {j.index: j.out_dir / "runner.stderr.log" for j in jobs}, name
     )

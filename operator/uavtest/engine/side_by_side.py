@@ -65,7 +65,8 @@ def fly_side_by_side(
             turn.wait_for(lambda: started == k)
             try:
                 if start is not None:
-                    start(item)
+                    with shared.output:
+                        start(item)
             finally:
                 started += 1
                 turn.notify_all()
