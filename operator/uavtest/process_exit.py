@@ -4,9 +4,9 @@ By the time a command returns it has closed its files and stored or printed its 
 the interpreter's teardown still does after that is free every module's objects one by one:
 numpy, pydantic, pymavlink, rich and matplotlib, about 0.45 s of a 4 s ``uavtest run`` on a
 2-core machine and tens of milliseconds on a replica's clock. ``end_process`` does what a
-normal exit owes the user first (waits for non-daemon threads as the interpreter does, runs the
-exit handlers: logging, multiprocessing's children, temporary directories; flushes the standard
-streams), then ends the process with ``os._exit``.
+normal exit owes the user first (runs the exit handlers: logging, multiprocessing's children,
+temporary directories; flushes the standard streams), then ends the process with ``os._exit``;
+while a non-daemon thread still runs it leaves the exit to the interpreter, which waits for it.
 
 Only process entry points end this way: the console script (``uavtest.cli.script``) with
 ``run_then_end``; a replica's runner and simulator (``uavtest.engine.entry.main``) with
@@ -47,12 +47,15 @@ def flush_and_exit(code: int) -> NoReturn:
 
 
 def end_process(code: int) -> NoReturn:
-    """What a normal exit does before the teardown, then exit with ``code``: wait for the
-    non-daemon threads and run the exit handlers (``logging.shutdown`` among them)."""
+    """Run the exit handlers (``logging.shutdown`` among them), flush, and exit with ``code``.
+
+    While another non-daemon thread still runs, a normal exit instead (``SystemExit``): the
+    interpreter first tells executors to stop their idle workers, then waits for every such
+    thread, which a process ending here could only imitate with the threading module's internals.
+    """
     main = threading.main_thread()
-    for thread in threading.enumerate():
-        if thread is not main and not thread.daemon:
-            thread.join()
+    if any(t is not main and not t.daemon and t.is_alive() for t in threading.enumerate()):
+        sys.exit(code)
     atexit._run_exitfuncs()
     flush_and_exit(code)
 

@@ -94,3 +94,20 @@ def test_the_uavtest_command_prints_everything_and_keeps_its_exit_codes(tmp_path
     assert proc.returncode == 0, proc.stderr[-3000:]
     report = json.loads(proc.stdout)  # the whole document, flushed before the process ended
     assert report["passed"] == 1 and report["results"][0]["verdict"] == "pass"
+
+
+def test_an_executor_left_running_does_not_hang_the_exit() -> None:
+    """Idle workers of a ThreadPoolExecutor nobody shut down wait for work forever; a normal
+    exit tells them to stop first, and so must this one."""
+    proc = _python(
+        """
+        from concurrent.futures import ThreadPoolExecutor
+        from uavtest.process_exit import run_then_end
+        pool = ThreadPoolExecutor(max_workers=2)
+        def main():
+            print(pool.submit(lambda: 6 * 7).result(), flush=False)
+        run_then_end(main)
+        """
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == "42\n"
