@@ -57,8 +57,13 @@ def test_an_interrupt_cancels_every_test_still_flying() -> None:
         if shared.cancel.wait(5.0):
             cancelled.append(item)
 
-    with pytest.raises(KeyboardInterrupt):
-        fly_side_by_side([0, 1], 2, fly)
+    # Python's own handler, whatever this process inherited (a background job ignores SIGINT)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            fly_side_by_side([0, 1], 2, fly)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert sorted(cancelled) == [0, 1]
 
 
