@@ -29,7 +29,7 @@ from rich.table import Table
 from uavtest.analysis.models import ReplicaResult, RunSummary
 from uavtest.engine.bytecode import replica_environ
 from uavtest.engine.launch import ExecLauncher, Launcher, WarmLauncher
-from uavtest.engine.ports import PX4_MAX_INSTANCES, PortAllocator
+from uavtest.engine.ports import PX4_MAX_INSTANCES
 from uavtest.engine.replica import DEFAULT_RETRIES, ReplicaJob, run_replica
 from uavtest.engine.side_by_side import Shared
 from uavtest.engine.speed import (
@@ -233,24 +233,26 @@ def _fly_all(
     launcher: Launcher,
     board: _Board,
     console: Console,
-    shared: Shared | None = None,
+    shared: Shared,
 ) -> None:
-    """Fly the replicas, ``parallel`` at a time, under a live board; side by side with other
-    tests (``shared``): within the shared slots, a line per finished replica instead of the board
-    (one live display per console)."""
-    ports = shared.ports if shared is not None else PortAllocator()
-    cancel = shared.cancel if shared is not None else threading.Event()
+    """Fly the replicas, ``parallel`` at a time within the shared slots, under a live board; side
+    by side with other tests, a line per finished replica instead (one live display per console)."""
 
     def fly(job: ReplicaJob) -> ReplicaResult:
-        slot = shared.slots if shared is not None else contextlib.nullcontext()
-        with slot:
+        with shared.slots:
             return run_replica(
-                job, ports=ports, store=store, on_status=board.set, cancel=cancel, launcher=launcher
+                job,
+                ports=shared.ports,
+                store=store,
+                on_status=board.set,
+                cancel=shared.cancel,
+                launcher=launcher,
             )
 
-    live = Live(board, console=console, refresh_per_second=4, transient=False) if shared is None else None
+    live = not shared.side_by_side
+    board_display = Live(board, console=console, refresh_per_second=4, transient=False)
     with (
-        live if live is not None else contextlib.nullcontext(),
+        board_display if live else contextlib.nullcontext(),
         ThreadPoolExecutor(max_workers=parallel, thread_name_prefix="replica") as pool,
     ):
         futures: list[Future[ReplicaResult]] = [pool.submit(fly, job) for job in jobs]
@@ -258,15 +260,15 @@ def _fly_all(
             for future in as_completed(futures):
                 result = future.result()
                 board.done(result)
-                if shared is not None:  # no live board: a line, kept out of other tests' blocks
+                if not live:  # a line, kept out of other tests' blocks
                     with shared.output:
                         console.print(f"{board.name} · {board.line(result.index)}", highlight=False)
         except BaseException:
-            cancel.set()  # every replica stops its processes; the pool then drains
+            shared.cancel.set()  # every replica stops its processes; the pool then drains
             for f in futures:
                 f.cancel()
             raise
-    if live is not None and not console.is_terminal:
+    if live and not console.is_terminal:
         console.line()  # a live display ends its last frame without a newline when not on a terminal
 
 
@@ -324,6 +326,7 @@ def run_local(
     from uavtest.store import LocalStore
 
     console = console or Console(stderr=True)
+    shared = shared if shared is not None else Shared.alone()
     settings = EngineSettings()
     test = load_test(options.test)
     notices = [
@@ -332,8 +335,7 @@ def run_local(
         if n
     ]
     # side by side, a test's lines stay together, not inside another test's block
-    together = shared.output if shared is not None else contextlib.nullcontext()
-    with together:
+    with shared.output:
         for n in notices:
             console.print(f"[cyan]notice:[/] {n}", highlight=False)
         for w in [*simulator_warnings(test.spec), speed_factor_notice(test.spec)]:
@@ -389,7 +391,7 @@ def run_local(
     pace = ""
     if speed is not None:
         pace = f" PX4 at {speed:g}x real time ({how}),"
-    with together:
+    with shared.output:
         console.print(
             f"run [bold]{run_id}[/] of [bold]{name}[/]: {len(indices)} replica(s), {parallel} at a time,"
             f"{pace} artifacts in {store.root / run_prefix(NAMESPACE, name, run_id)}",
@@ -407,7 +409,7 @@ def run_local(
     ).start()
     _fly_all(jobs, parallel, store, launcher, board, console, shared)
 
-    with shared.aggregate if shared is not None else contextlib.nullcontext():
+    with shared.aggregate:
         summary = aggregate_run(store, NAMESPACE, name, run_id, indices, spec)
     summary_path = store.path(aggregate_key(NAMESPACE, name, run_id, "summary.json"))
     plot_path = store.path(aggregate_key(NAMESPACE, name, run_id, "trajectories.png"))

@@ -13,9 +13,11 @@ always fly one after the other: their speed factor is chosen for the replicas of
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor, wait
+from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
 from typing import TypeVar
 
@@ -29,9 +31,11 @@ R = TypeVar("R")
 
 @dataclass(slots=True)
 class Shared:
-    """What the runs of one command share while they fly side by side."""
+    """What the runs of one command share while they fly side by side (``alone``: a test flying
+    by itself has the same, uncontended, and shows its live board)."""
 
-    slots: threading.BoundedSemaphore  # replicas flying at once, over all the tests
+    slots: AbstractContextManager[object]  # replicas flying at once, over all the tests
+    side_by_side: bool = True  # False: one test alone, under its live board
     ports: PortAllocator = field(default_factory=PortAllocator)
     cancel: threading.Event = field(default_factory=threading.Event)
     aggregate: threading.Lock = field(default_factory=threading.Lock)
@@ -40,6 +44,11 @@ class Shared:
     @classmethod
     def for_jobs(cls, jobs: int) -> Shared:
         return cls(threading.BoundedSemaphore(jobs))
+
+    @classmethod
+    def alone(cls) -> Shared:
+        """One test by itself: no slots beyond its own replicas' pool."""
+        return cls(contextlib.nullcontext(), side_by_side=False)
 
 
 def fly_side_by_side(
